@@ -1,0 +1,385 @@
+"""Instances: the problem a schedule solves, and the instance file (DESIGN §3 "Instance validity",
+§4 "Instance").
+
+An instance is a start grid (obstacles, tiles), an optional goal grid (omitted: the start's tiles,
+a pure path-planning problem), robots with their start poses, an optional front-foot goal cell per
+robot, and an optional reconfiguration sequence (``tasks``). It is a frozen record; everything the
+rules need (pose graphs, masks, the start state) is derived from it.
+"""
+from __future__ import annotations
+
+import json
+import re
+from dataclasses import dataclass, field
+from functools import cached_property
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+
+from .errors import InstanceError, MovesetError
+from .grid import CELL_CHARS, Grid, is_connected
+from .moveset import Moveset, load_moveset
+from .posegraph import compile_posegraph
+from .rules import State, World
+from .yamlsource import (
+    Source,
+    expect_bool,
+    expect_list,
+    expect_mapping,
+    expect_str,
+    expect_xy,
+    load_yaml_file,
+    load_yaml_text,
+)
+
+XY = tuple[int, int]
+TOP_FIELDS = ("name", "moveset", "grid", "goal", "robots", "robot_goals", "tasks", "meta")
+
+
+@dataclass(frozen=True)
+class Robot:
+    """A robot's start: front and back foot (``point``: ``front`` is its cell, ``back`` None),
+    whether it carries a tile, and its own moveset if it differs from the instance's."""
+
+    front: XY
+    back: XY | None = None
+    carrying: bool = False
+    moveset: Moveset | None = None
+
+
+@dataclass(frozen=True)
+class Task:
+    """One step of a reconfiguration sequence: pick the tile at ``pick``, place it at ``place``."""
+
+    pick: XY
+    place: XY
+
+
+@dataclass(frozen=True)
+class Instance:
+    """A reconfiguration (or path-planning) problem. See the module docstring."""
+
+    name: str
+    moveset: Moveset
+    start: Grid
+    robots: tuple[Robot, ...]
+    goal: Grid | None = None
+    robot_goals: tuple[XY | None, ...] | None = None
+    tasks: tuple[Task, ...] | None = None
+    meta: dict[str, Any] | None = field(default=None, hash=False)
+
+    # ---- derived --------------------------------------------------------------------------
+
+    @property
+    def width(self) -> int:
+        return self.start.width
+
+    @property
+    def height(self) -> int:
+        return self.start.height
+
+    @property
+    def num_robots(self) -> int:
+        return len(self.robots)
+
+    @property
+    def goal_grid(self) -> Grid:
+        return self.goal if self.goal is not None else self.start
+
+    @property
+    def movesets(self) -> tuple[Moveset, ...]:
+        """Each robot's moveset."""
+        return tuple(r.moveset or self.moveset for r in self.robots)
+
+    @cached_property
+    def world(self) -> World:
+        """The compiled world: one pose graph per distinct moveset, shared by its robots."""
+        graphs = {}
+        for ms in self.movesets:
+            if ms not in graphs:
+                graphs[ms] = compile_posegraph(ms, self.width, self.height, self.start.obstacles)
+        return World(self.width, self.height, self.start.obstacles, tuple(graphs[ms] for ms in self.movesets))
+
+    @cached_property
+    def start_state(self) -> State:
+        poses = tuple(g.pose_of(r.front, r.back) for g, r in zip(self.world.graphs, self.robots))
+        return State(self.start.tiles, poses, tuple(r.carrying for r in self.robots))
+
+    @property
+    def goal_tiles(self) -> np.ndarray:
+        return self.goal_grid.tiles
+
+    @property
+    def goal_cells(self) -> tuple[int, ...]:
+        """Front-foot goal cell per robot as a cell index, -1 where any cell will do."""
+        goals = self.robot_goals or (None,) * self.num_robots
+        return tuple(-1 if g is None else self.start.cell(*g) for g in goals)
+
+    @property
+    def is_reconfiguration(self) -> bool:
+        """Whether tiles must move (goal tiles differ from start tiles, or robots carry tiles)."""
+        return bool(np.any(self.start.tiles != self.goal_tiles)) or any(r.carrying for r in self.robots)
+
+
+# ---------------------------------------------------------------------------------------------
+# instance validity (DESIGN §3)
+
+
+def check_instance(inst: Instance, src: Source | None = None) -> Instance:
+    """Check the instance validity rules; raise :class:`InstanceError` naming the field.
+
+    Returns the instance, so that ``check_instance(Instance(...))`` reads as a constructor.
+    """
+    src = src or Source(None, InstanceError)
+    w, h = inst.width, inst.height
+    start, goal = inst.start, inst.goal_grid
+    if (goal.width, goal.height) != (w, h):
+        raise src.fail(("goal",), f"the goal is {goal.width}x{goal.height}, the start grid {w}x{h}")
+    if not np.array_equal(goal.obstacles, start.obstacles):
+        x, y = start.xy(int(np.flatnonzero(goal.obstacles != start.obstacles)[0]))
+        raise src.fail(("goal",), f"obstacles differ from the start grid's at ({x}, {y})")
+    if not is_connected(start.tiles, w, h):
+        raise src.fail(("grid",), _connectivity_problem(start, "start"))
+    if not is_connected(goal.tiles, w, h):
+        raise src.fail(("goal",), _connectivity_problem(goal, "goal"))
+
+    owners: dict[XY, int] = {}
+    for i, (robot, ms) in enumerate(zip(inst.robots, inst.movesets)):
+        for cell, part in _occupied(inst, i, robot, ms, src):
+            if cell in owners:
+                raise src.fail(("robots", i, part), f"{cell} is also occupied by robots[{owners[cell]}]")
+            owners[cell] = i
+    carried = sum(r.carrying for r in inst.robots)
+    n_start, n_goal = int(start.tiles.sum()), int(goal.tiles.sum())
+    if n_goal != n_start + carried:
+        raise src.fail(("goal",), f"the goal has {n_goal} tiles, but the start has {n_start} tiles "
+                                  f"and {carried} carried: {n_start + carried} expected")
+
+    if inst.robot_goals is not None:
+        if len(inst.robot_goals) != inst.num_robots:
+            raise src.fail(("robot_goals",), f"{len(inst.robot_goals)} entries, expected one per robot "
+                                             f"({inst.num_robots}; null for no goal)")
+        seen: dict[XY, int] = {}
+        for i, g in enumerate(inst.robot_goals):
+            if g is None:
+                continue
+            _inside(g, start, src, ("robot_goals", i))
+            if not goal.tiles[goal.cell(*g)]:
+                raise src.fail(("robot_goals", i), f"{g} is not a tile of the goal structure; a robot's front foot must end on a tile")
+            if g in seen:
+                raise src.fail(("robot_goals", i), f"{g} is also the goal of robot {seen[g]}")
+            seen[g] = i
+    for k, task in enumerate(inst.tasks or ()):
+        for part in ("pick", "place"):
+            xy = getattr(task, part)
+            _inside(xy, start, src, ("tasks", k, part))
+            if start.obstacles[start.cell(*xy)]:
+                raise src.fail(("tasks", k, part), f"{xy} is an obstacle")
+    return inst
+
+
+def _connectivity_problem(grid: Grid, which: str) -> str:
+    if not grid.tiles.any():
+        return f"the {which} has no tiles"
+    return f"the {which} tiles are not 4-connected"
+
+
+def _inside(xy: XY, grid: Grid, src: Source, path) -> None:
+    if not grid.inside(*xy):
+        raise src.fail(path, f"{xy} is outside the {grid.width}x{grid.height} grid")
+
+
+def _occupied(inst: Instance, i: int, robot: Robot, ms: Moveset, src: Source):
+    """Check one start robot and yield its occupied cells (feet, carried tile) with field names."""
+    grid = inst.start
+    path = ("robots", i)
+    if ms.footprint == "point":
+        if robot.back is not None:
+            raise src.fail(path, f"a robot with the point moveset '{ms.name}' has one cell: give 'at', not front/back")
+        feet = [("at", robot.front)]
+    else:
+        if robot.back is None:
+            raise src.fail(path, f"a robot with the biped moveset '{ms.name}' needs 'front' and 'back'")
+        feet = [("front", robot.front), ("back", robot.back)]
+    for part, xy in feet:
+        _inside(xy, grid, src, path + (part,))
+        c = grid.cell(*xy)
+        if grid.obstacles[c]:
+            raise src.fail(path + (part,), f"{xy} is an obstacle")
+        if not grid.tiles[c]:
+            raise src.fail(path + (part,), f"{xy} is not a tile (robots stand on tiles)")
+    cells = [(xy, part) for part, xy in feet]
+    if robot.back is not None:
+        (fx, fy), (bx, by) = robot.front, robot.back
+        if abs(fx - bx) + abs(fy - by) != 1:
+            raise src.fail(path, f"feet {robot.front} and {robot.back} are not 4-adjacent")
+        if robot.carrying:
+            ahead = (2 * fx - bx, 2 * fy - by)
+            if not grid.inside(*ahead) or grid.obstacles[grid.cell(*ahead)]:
+                raise src.fail(path + ("carrying",), f"the carried tile would hover at {ahead}, "
+                                                     "outside the grid or on an obstacle")
+            cells.append((ahead, "carrying"))
+    yield from ((xy, part) for xy, part in cells)
+
+
+# ---------------------------------------------------------------------------------------------
+# reading
+
+
+def load_instance(path: str | Path, *, check: bool = True) -> Instance:
+    """Read an instance file and (unless ``check`` is False) check its validity rules.
+
+    Raises :class:`InstanceError` naming the file, line and field for anything wrong. With
+    ``check=False`` only the file's form is checked, so that an invalid instance can be shown.
+    """
+    data, src = load_yaml_file(path, InstanceError)
+    inst = parse_instance(data, src, Path(path).parent, default_name=Path(path).stem)
+    return check_instance(inst, src) if check else inst
+
+
+def instance_from_text(text: str, name: str | None = None, base_dir: str | Path | None = None) -> Instance:
+    """Parse and check instance YAML given as text (``name`` labels errors)."""
+    data, src = load_yaml_text(text, name, InstanceError)
+    return check_instance(parse_instance(data, src, base_dir, default_name=name or "instance"), src)
+
+
+def parse_instance(data, src: Source, base_dir=None, default_name: str = "instance") -> Instance:
+    """Build an instance from parsed YAML, checking the file's form (not the validity rules)."""
+    top = expect_mapping(data, src, (), required=("grid", "robots"), optional=TOP_FIELDS)
+    name = expect_str(top["name"], src, ("name",)) if "name" in top else default_name
+    moveset = _moveset(top.get("moveset", "S7"), src, ("moveset",), base_dir)
+    start = _grid(top["grid"], src, "grid")
+    goal = _grid(top["goal"], src, "goal") if top.get("goal") is not None else None
+
+    robots = []
+    for i, raw in enumerate(expect_list(top["robots"], src, ("robots",))):
+        path = ("robots", i)
+        own = raw.get("moveset") if isinstance(raw, dict) else None
+        ms = _moveset(own, src, path + ("moveset",), base_dir) if own is not None else moveset
+        if ms.footprint == "point":
+            fields = expect_mapping(raw, src, path, required=("at",), optional=("carrying", "moveset"))
+            front, back = expect_xy(fields["at"], src, path + ("at",)), None
+        else:
+            fields = expect_mapping(raw, src, path, required=("front", "back"), optional=("carrying", "moveset"))
+            front = expect_xy(fields["front"], src, path + ("front",))
+            back = expect_xy(fields["back"], src, path + ("back",))
+        carrying = expect_bool(fields["carrying"], src, path + ("carrying",)) if "carrying" in fields else False
+        robots.append(Robot(front, back, carrying, ms if own is not None else None))
+
+    robot_goals = None
+    if top.get("robot_goals") is not None:
+        goals = expect_list(top["robot_goals"], src, ("robot_goals",), "a list of [x, y] or null per robot")
+        robot_goals = tuple(None if g is None else expect_xy(g, src, ("robot_goals", k)) for k, g in enumerate(goals))
+    tasks = None
+    if top.get("tasks") is not None:
+        tasks = []
+        for k, raw in enumerate(expect_list(top["tasks"], src, ("tasks",))):
+            fields = expect_mapping(raw, src, ("tasks", k), required=("pick", "place"))
+            tasks.append(Task(expect_xy(fields["pick"], src, ("tasks", k, "pick")),
+                              expect_xy(fields["place"], src, ("tasks", k, "place"))))
+        tasks = tuple(tasks)
+    meta = top.get("meta")
+    if meta is not None and not isinstance(meta, dict):
+        raise src.fail(("meta",), "expected a mapping")
+    return Instance(name, moveset, start, tuple(robots), goal, robot_goals, tasks, meta)
+
+
+def _moveset(ref, src: Source, path, base_dir) -> Moveset:
+    ref = expect_str(ref, src, path, "a moveset name (S5, S7, point) or a path")
+    try:
+        return load_moveset(ref, base_dir)
+    except MovesetError as exc:
+        raise src.fail(path, str(exc)) from None
+
+
+def _grid(text, src: Source, key: str) -> Grid:
+    path = (key,)
+    text = expect_str(text, src, path, "the grid as lines of '#', '.' and 'T'")
+    rows = text.splitlines()
+    while rows and not rows[-1].strip():
+        rows.pop()
+    first = src.text_start.get(path)  # line of row 0 in a block scalar
+
+    def row_line(r: int) -> int | None:
+        return first + r if first is not None else None
+
+    if not rows:
+        raise src.fail(path, "the grid has no rows")
+    width = len(rows[0])
+    for r, row in enumerate(rows):
+        if len(row) != width:
+            raise src.fail(path, f"row {r} has {len(row)} cells, expected {width} like row 0 (the grid must be a rectangle)", row_line(r))
+        for x, ch in enumerate(row):
+            if ch not in CELL_CHARS:
+                raise src.fail(path, f"row {r}, column {x}: unknown character {ch!r} (expected '#' obstacle, '.' empty or 'T' tile)", row_line(r))
+    if width == 0:
+        raise src.fail(path, "the grid rows are empty")
+    return Grid(width, len(rows), tuple(rows))
+
+
+# ---------------------------------------------------------------------------------------------
+# writing
+
+
+def dump_instance(inst: Instance) -> str:
+    """The canonical YAML text of an instance (``load(dump(x)) == x``)."""
+    out = [f"name: {_scalar(inst.name)}", f"moveset: {_scalar(inst.moveset.ref or inst.moveset.name)}"]
+    out += _block("grid", inst.start)
+    if inst.goal is not None:
+        out += _block("goal", inst.goal)
+    out.append("robots:" if inst.robots else "robots: []")
+    for r in inst.robots:
+        parts = [f"front: {_xy(r.front)}", f"back: {_xy(r.back)}"] if r.back is not None else [f"at: {_xy(r.front)}"]
+        if r.carrying:
+            parts.append("carrying: true")
+        if r.moveset is not None:
+            parts.append(f"moveset: {_scalar(r.moveset.ref or r.moveset.name)}")
+        out.append("  - {" + ", ".join(parts) + "}")
+    if inst.robot_goals is not None:
+        out.append("robot_goals: [" + ", ".join("null" if g is None else _xy(g) for g in inst.robot_goals) + "]")
+    if inst.tasks is not None:
+        out.append("tasks:" if inst.tasks else "tasks: []")
+        out += [f"  - {{pick: {_xy(t.pick)}, place: {_xy(t.place)}}}" for t in inst.tasks]
+    if inst.meta is not None:
+        text = yaml.safe_dump(inst.meta, sort_keys=False, default_flow_style=False, width=100).rstrip()
+        out.append("meta: {}" if not inst.meta else "meta:")
+        if inst.meta:
+            out += ["  " + line for line in text.splitlines()]
+    return "\n".join(out) + "\n"
+
+
+def save_instance(inst: Instance, path: str | Path) -> None:
+    """Write an instance file atomically (a failed write leaves no partial file)."""
+    write_atomic(path, dump_instance(inst), InstanceError)
+
+
+def write_atomic(path: str | Path, text: str, error: type[Exception]) -> None:
+    """Write ``text`` to ``path`` through a temporary file in the same folder, then rename."""
+    path = Path(path)
+    tmp = path.with_name(f".{path.name}.tmp")
+    try:
+        tmp.write_text(text, encoding="utf-8")
+        tmp.replace(path)
+    except OSError as exc:
+        tmp.unlink(missing_ok=True)
+        raise error(f"{path}: cannot write ({exc.strerror})") from None
+
+
+def _block(key: str, grid: Grid) -> list[str]:
+    return [f"{key}: |"] + ["  " + row for row in grid.rows]
+
+
+def _xy(xy: XY) -> str:
+    return f"[{xy[0]}, {xy[1]}]"
+
+
+_PLAIN = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.\-/]*$")
+
+
+def _scalar(s: str) -> str:
+    """A string as a YAML scalar: plain when that reads back as the same string, else quoted."""
+    if _PLAIN.match(s) and yaml.safe_load(s) == s:
+        return s
+    return json.dumps(s)

@@ -1,0 +1,138 @@
+"""Exhaustive breadth-first search over joint states: the reference solver for tiny instances.
+
+Every joint action of every reachable state is tried under the canonical rules, level by level,
+so the first goal state found has the optimal makespan, and an exhausted search proves that no
+schedule exists. Exponential in the number of robots: it is the yardstick the other solvers are
+tested against, not a planner.
+"""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from bille.instances import Instance, OptionError
+from bille.instances.moveset import Kind
+from bille.instances.rules import State, apply, goal_violation
+
+from .result import Result
+from .schedule import Schedule
+
+
+def candidate_actions(instance: Instance, state: State, i: int) -> list[int]:
+    """Robot ``i``'s actions that pass its own rules 1, 2 and 4 on the current tiles.
+
+    Rules between robots are left to :func:`~bille.instances.rules.apply`; a robot's new foot
+    cannot become a tile by another robot's action in the same step without a collision, so this
+    filter loses no valid joint action.
+    """
+    g = instance.world.graphs[i]
+    p, carrying, tiles = state.poses[i], state.carrying[i], state.tiles
+    out = []
+    for a in range(g.num_actions):
+        if g.succ[p, a] < 0 or (carrying and not g.carry_ok[p, a]):
+            continue
+        kind, t = g.kind[a], g.target[p, a]
+        if kind == Kind.PICK and (carrying or not tiles[t]):
+            continue
+        if kind == Kind.PLACE and (not carrying or tiles[t]):
+            continue
+        if kind in (Kind.WAIT, Kind.MOTION) and not tiles[g.need[p, a]].all():
+            continue
+        out.append(a)
+    return out
+
+
+def plan(instance: Instance, *, time_limit: float | None = None, max_steps: int = 64,
+         max_states: int = 2_000_000) -> Result:
+    """Optimal-makespan schedule by breadth-first search.
+
+    Parameters
+    ----------
+    time_limit : seconds before giving up (status ``timeout``), None for no limit.
+    max_steps : horizon cap; no goal within it and nothing left to expand below it -> ``infeasible``
+        only if the whole state space was exhausted, else ``timeout``.
+    max_states : stop (status ``timeout``) after storing this many states.
+    """
+    if max_steps < 0 or max_states < 1:
+        raise OptionError("bfs: max_steps must be >= 0 and max_states >= 1")
+    start = time.perf_counter()
+    deadline = None if time_limit is None else start + time_limit
+    world = instance.world
+    goal_tiles, goal_cells = instance.goal_tiles, instance.goal_cells
+    root = instance.start_state
+    parent: dict = {root.key(): None}
+    frontier = [root]
+    depth, expanded, truncated = 0, 0, False
+
+    def stats():
+        return {"expanded": expanded, "states": len(parent), "depth": depth}
+
+    while frontier:
+        for s in frontier:
+            if goal_violation(world, s, goal_tiles, goal_cells, depth) is None:
+                schedule = _unwind(instance, parent, s)
+                return Result("bfs", "optimal", schedule, lower_bound=depth, stats=stats(),
+                              time_s=time.perf_counter() - start)
+        if depth == max_steps:
+            truncated = True
+            break
+        nxt = []
+        for s in frontier:
+            if deadline is not None and time.perf_counter() > deadline or len(parent) > max_states:
+                return Result("bfs", "timeout", lower_bound=depth, stats=stats(), time_s=time.perf_counter() - start)
+            expanded += 1
+            options = [candidate_actions(instance, s, i) for i in range(instance.num_robots)]
+            for joint in _disjoint_products(instance, s, options):
+                new = apply(world, s, joint)
+                if isinstance(new, State):
+                    key = new.key()
+                    if key not in parent:
+                        parent[key] = (s.key(), joint)
+                        nxt.append(new)
+        frontier = nxt
+        depth += 1
+    status = "timeout" if truncated else "infeasible"
+    return Result("bfs", status, lower_bound=depth + (1 if truncated else 0), stats=stats(),
+                  time_s=time.perf_counter() - start)
+
+
+def _disjoint_products(instance: Instance, state: State, options: list[list[int]]):
+    """Joint actions whose collision sets are pairwise disjoint (rule 3), by backtracking.
+
+    Pruning here only saves work: every joint action yielded is still checked by ``apply``.
+    """
+    sets = []
+    for i, opts in enumerate(options):
+        g, p, carrying = instance.world.graphs[i], state.poses[i], state.carrying[i]
+        row = []
+        for a in opts:
+            cells = set(g.coll[p, a].tolist())
+            if carrying:
+                cells |= set(g.carry[p, a].tolist())
+            cells.discard(-1)
+            row.append((a, frozenset(cells)))
+        sets.append(row)
+    chosen: list[int] = []
+
+    def extend(i: int, used: frozenset):
+        if i == len(sets):
+            yield tuple(chosen)
+            return
+        for a, cells in sets[i]:
+            if used.isdisjoint(cells):
+                chosen.append(a)
+                yield from extend(i + 1, used | cells)
+                chosen.pop()
+
+    yield from extend(0, frozenset())
+
+
+def _unwind(instance: Instance, parent: dict, state: State) -> Schedule:
+    steps = []
+    key = state.key()
+    while parent[key] is not None:
+        key, joint = parent[key]
+        steps.append(joint)
+    ids = np.array(steps[::-1], dtype=np.int64).T.reshape(instance.num_robots, len(steps))
+    return Schedule.from_ids(instance, ids, meta={"method": "bfs"})

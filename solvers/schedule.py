@@ -1,0 +1,110 @@
+"""Schedules and the schedule file (DESIGN §4, "Schedule").
+
+A schedule is one list of action names per robot, all of one length; step ``t`` (1-based) is the
+joint action made of every robot's ``t``-th action. Names are bound to action ids of each robot's
+moveset by :func:`bind`, which is where a schedule is matched to its instance.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+
+from bille.instances import Instance
+from bille.instances.errors import ScheduleError
+from bille.instances.instance import write_atomic
+from bille.instances.yamlsource import Source, expect_list, expect_mapping, load_yaml_file, load_yaml_text
+
+
+@dataclass(frozen=True)
+class Schedule:
+    """Action names per robot (``actions[i][t]``); ``origin`` remembers the file it came from."""
+
+    actions: tuple[tuple[str, ...], ...]
+    meta: dict[str, Any] | None = field(default=None, hash=False)
+    origin: Source | None = field(default=None, compare=False, hash=False, repr=False)
+
+    @property
+    def num_robots(self) -> int:
+        return len(self.actions)
+
+    @property
+    def length(self) -> int:
+        return len(self.actions[0]) if self.actions else 0
+
+    @classmethod
+    def from_ids(cls, instance: Instance, ids, meta: dict | None = None) -> "Schedule":
+        """Build a schedule from an ``int[m, L]`` matrix of action ids (the inverse of :func:`bind`)."""
+        ids = np.asarray(ids, dtype=np.int64).reshape(instance.num_robots, -1)
+        return cls(tuple(tuple(ms.actions[a].name for a in row) for ms, row in zip(instance.movesets, ids.tolist())), meta)
+
+
+def bind(instance: Instance, schedule: Schedule) -> np.ndarray:
+    """Action ids ``int64[m, L]`` of a schedule for an instance.
+
+    Raises :class:`ScheduleError` (naming the file and line when known) if the robot count differs
+    or an action is not in the robot's moveset.
+    """
+    src = schedule.origin or Source(None, ScheduleError)
+    if schedule.num_robots != instance.num_robots:
+        raise src.fail(("robots",), f"{schedule.num_robots} robots, but instance '{instance.name}' "
+                                    f"has {instance.num_robots}")
+    ids = np.zeros((schedule.num_robots, schedule.length), dtype=np.int64)
+    for i, (ms, row) in enumerate(zip(instance.movesets, schedule.actions)):
+        index = ms.index
+        try:
+            ids[i] = [index[a] for a in row]
+        except KeyError:
+            t = next(t for t, a in enumerate(row) if a not in index)
+            raise src.fail(("robots", i, t), f"unknown action {row[t]!r} for robot {i}'s moveset "
+                                             f"{ms.name} (expected one of: {', '.join(ms.names)})") from None
+    return ids
+
+
+def load_schedule(path: str | Path) -> Schedule:
+    """Read a schedule file; raises :class:`ScheduleError` naming file, line and field."""
+    data, src = load_yaml_file(path, ScheduleError)
+    return parse_schedule(data, src)
+
+
+def schedule_from_text(text: str, name: str | None = None) -> Schedule:
+    data, src = load_yaml_text(text, name, ScheduleError)
+    return parse_schedule(data, src)
+
+
+def parse_schedule(data, src: Source) -> Schedule:
+    top = expect_mapping(data, src, (), required=("robots",), optional=("meta",))
+    robots = expect_list(top["robots"], src, ("robots",), "a list with one list of actions per robot")
+    rows = []
+    for i, row in enumerate(robots):
+        row = expect_list(row, src, ("robots", i), "a list of action names")
+        for t, a in enumerate(row):
+            if not isinstance(a, str) or not a:
+                shown = "nothing" if a is None else repr(a)
+                raise src.fail(("robots", i, t), f"expected an action name, got {shown}")
+        if rows and len(row) != len(rows[0]):
+            raise src.fail(("robots", i), f"{len(row)} actions, expected {len(rows[0])} like robots[0] "
+                                          "(every robot has one action per step)")
+        rows.append(tuple(row))
+    meta = top.get("meta")
+    if meta is not None and not isinstance(meta, dict):
+        raise src.fail(("meta",), "expected a mapping")
+    return Schedule(tuple(rows), meta, src)
+
+
+def dump_schedule(schedule: Schedule) -> str:
+    """The canonical YAML text of a schedule (one flow list per robot)."""
+    out = ["robots:" if schedule.actions else "robots: []"]
+    out += ["  - [" + ", ".join(row) + "]" for row in schedule.actions]
+    if schedule.meta is not None:
+        text = yaml.safe_dump(schedule.meta, sort_keys=False, default_flow_style=False, width=100).rstrip()
+        out += ["meta:"] + ["  " + line for line in text.splitlines()] if schedule.meta else ["meta: {}"]
+    return "\n".join(out) + "\n"
+
+
+def save_schedule(schedule: Schedule, path: str | Path) -> None:
+    """Write a schedule file atomically."""
+    write_atomic(path, dump_schedule(schedule), ScheduleError)

@@ -1,0 +1,1 @@
+"""Command line, pictures, benchmarks and the execution layer."""

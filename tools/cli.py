@@ -1,0 +1,143 @@
+"""The ``bille`` command line: load -> (solve) -> validate -> save -> print, each a library call.
+
+Exit codes (DESIGN §5): 0 success, 1 a negative answer (invalid schedule, invalid instance shown,
+infeasible, timeout without schedule), 2 bad input or usage. A user error is one line on stderr.
+"""
+from __future__ import annotations
+
+import json
+import sys
+from importlib.metadata import version
+
+import click
+
+from bille.instances import BilleError, InstanceError, ScheduleError, check_instance, load_instance
+from bille.instances.bundled import bundled_names, bundled_path, resolve
+from bille.solvers import METHODS, load_schedule, save_schedule, solve, validate
+
+from .render import describe, draw
+
+EXIT_OK, EXIT_NO, EXIT_USAGE = 0, 1, 2
+
+
+def _instance(arg: str, *, check: bool = True):
+    return load_instance(resolve(arg, InstanceError), check=check)
+
+
+def _schedule(arg: str):
+    return load_schedule(resolve(arg, ScheduleError))
+
+
+def _print_json(obj) -> None:
+    click.echo(json.dumps(obj))
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100})
+@click.version_option(version("bille"), "--version", prog_name="bille", message="%(prog)s %(version)s")
+def cli() -> None:
+    """Multi-robot reconfiguration of 2D tile structures by Bill-E inchworm robots.
+
+    INSTANCE and SCHEDULE are YAML files, or the names of bundled ones (see 'bille list').
+    """
+
+
+@cli.command()
+@click.argument("instance")
+@click.argument("schedule")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of text.")
+def check(instance: str, schedule: str, as_json: bool) -> int:
+    """Check SCHEDULE against the rules for INSTANCE (exit 0 valid, 1 invalid, 2 bad input)."""
+    inst = _instance(instance)
+    sched = _schedule(schedule)
+    report = validate(inst, sched)
+    if as_json:
+        _print_json(report.to_json())
+    elif report.valid:
+        m = report.metrics
+        click.echo(f"valid: makespan {m.makespan}, tiles traveled {m.tiles_traveled}, "
+                   f"waits {m.waits}, picks {m.picks}, places {m.places}")
+    else:
+        v = report.violation
+        robot = "" if v.robot is None else f", robot {v.robot}"
+        click.echo(f"invalid: step {v.step}{robot}, rule {v.rule}: {v.message}")
+    return EXIT_OK if report.valid else EXIT_NO
+
+
+@cli.command()
+@click.argument("instance")
+def show(instance: str) -> int:
+    """Draw INSTANCE (robots as letters: front foot upper case, back foot lower case, '*' a
+    carried tile) with its sizes, movesets and validity (exit 1 if invalid)."""
+    inst = _instance(instance, check=False)
+    try:
+        check_instance(inst)
+        validity, code = "valid", EXIT_OK
+    except InstanceError as exc:
+        validity, code = f"INVALID: {exc}", EXIT_NO
+    start_tiles, goal_tiles = int(inst.start.tiles.sum()), int(inst.goal_grid.tiles.sum())
+    moved = int((inst.start.tiles != inst.goal_grid.tiles).sum())
+    kind = "reconfiguration" if inst.is_reconfiguration else "path planning"
+    click.echo(f"{inst.name}: {inst.width}x{inst.height} grid, moveset {inst.moveset.name}, "
+               f"{inst.num_robots} robots, {kind}")
+    click.echo(f"tiles: {start_tiles} at start, {goal_tiles} in the goal, {moved} cells differ; "
+               f"tasks: {len(inst.tasks) if inst.tasks is not None else 'none'}")
+    click.echo(f"instance: {validity}")
+    for line in draw(inst) + ["robots:"] + describe(inst):
+        click.echo(line)
+    return code
+
+
+@cli.command("list")
+def list_() -> int:
+    """List the bundled instances."""
+    for name in bundled_names():
+        inst = load_instance(bundled_path(name))
+        kind = "reconfiguration" if inst.is_reconfiguration else "path planning"
+        click.echo(f"{name:<16} {inst.width}x{inst.height}, {inst.num_robots} robots, moveset {inst.moveset.name}, {kind}")
+    return EXIT_OK
+
+
+@cli.command("solve")
+@click.argument("instance")
+@click.option("--method", "-m", type=click.Choice(sorted(METHODS)), default="bfs", show_default=True)
+@click.option("--time-limit", type=float, default=None, help="Seconds before giving up.")
+@click.option("-o", "--output", type=click.Path(dir_okay=False), help="Write the schedule here.")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of text.")
+def solve_(instance: str, method: str, time_limit: float | None, output: str | None, as_json: bool) -> int:
+    """Solve INSTANCE with METHOD; print the status and metrics (exit 1 if no schedule)."""
+    if time_limit is not None and time_limit <= 0:
+        raise click.BadParameter("must be positive", param_hint="--time-limit")
+    inst = _instance(instance)
+    result = solve(inst, method, time_limit=time_limit)
+    if output and result.schedule is not None:
+        save_schedule(result.schedule, output)
+    if as_json:
+        _print_json(result.to_json())
+    else:
+        m = result.metrics
+        text = f"{method}: {result.status} in {result.time_s:.3f} s"
+        if m is not None:
+            text += f"; makespan {m.makespan}, tiles traveled {m.tiles_traveled}, waits {m.waits}"
+        click.echo(text)
+        if output and result.schedule is not None:
+            click.echo(f"schedule written to {output}")
+    return EXIT_OK if result.schedule is not None else EXIT_NO
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the ``bille`` console script."""
+    try:
+        code = cli.main(args=argv, prog_name="bille", standalone_mode=False)
+    except click.exceptions.UsageError as exc:
+        cmd = exc.ctx.command_path if exc.ctx else "bille"
+        click.echo(f"{cmd}: {exc.format_message().rstrip('.')} (see '{cmd} --help')", err=True)
+        code = EXIT_USAGE
+    except click.exceptions.Abort:
+        click.echo("bille: aborted", err=True)
+        code = 130
+    except BilleError as exc:
+        click.echo(f"bille: error: {exc}", err=True)
+        code = EXIT_USAGE
+    except BrokenPipeError:
+        code = EXIT_OK
+    sys.exit(code if isinstance(code, int) else EXIT_OK)
