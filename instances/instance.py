@@ -19,7 +19,7 @@ import numpy as np
 import yaml
 
 from .errors import InstanceError, MovesetError
-from .grid import CELL_CHARS, Grid, is_connected
+from .grid import CELL_CHARS, Grid, detached_cells, is_connected
 from .moveset import Moveset, load_moveset
 from .posegraph import compile_posegraph
 from .rules import State, World
@@ -140,10 +140,9 @@ def check_instance(inst: Instance, src: Source | None = None) -> Instance:
     if not np.array_equal(goal.obstacles, start.obstacles):
         x, y = start.xy(int(np.flatnonzero(goal.obstacles != start.obstacles)[0]))
         raise src.fail(("goal",), f"obstacles differ from the start grid's at ({x}, {y})")
-    if not is_connected(start.tiles, w, h):
-        raise src.fail(("grid",), _connectivity_problem(start, "start"))
-    if not is_connected(goal.tiles, w, h):
-        raise src.fail(("goal",), _connectivity_problem(goal, "goal"))
+    for key, grid in (("grid", start), ("goal", goal)):
+        if not is_connected(grid.tiles, w, h):
+            _disconnected(grid, "start" if key == "grid" else "goal", src, key)
 
     owners: dict[XY, int] = {}
     for i, (robot, ms) in enumerate(zip(inst.robots, inst.movesets)):
@@ -180,10 +179,13 @@ def check_instance(inst: Instance, src: Source | None = None) -> Instance:
     return inst
 
 
-def _connectivity_problem(grid: Grid, which: str) -> str:
+def _disconnected(grid: Grid, which: str, src: Source, key: str):
     if not grid.tiles.any():
-        return f"the {which} has no tiles"
-    return f"the {which} tiles are not 4-connected"
+        raise src.fail((key,), f"the {which} has no tiles")
+    x, y = grid.xy(detached_cells(grid.tiles, grid.width, grid.height)[0])
+    first = src.text_start.get((key,))
+    raise src.fail((key,), f"the {which} tiles are not 4-connected: ({x}, {y}) is cut off from the rest",
+                   None if first is None else first + y)
 
 
 def _inside(xy: XY, grid: Grid, src: Source, path) -> None:

@@ -63,21 +63,20 @@ def load_yaml_text(text: str, name: str | None, error: type[BilleError]) -> tupl
     src = Source(name, error)
     try:
         node = yaml.compose(text, Loader=_Loader)
-    except yaml.MarkedYAMLError as exc:
-        mark = exc.problem_mark or exc.context_mark
-        line = mark.line + 1 if mark else None
-        what = exc.problem or exc.context or "unreadable"
-        raise src.fail((), f"YAML syntax error: {what}", line) from None
-    except yaml.YAMLError as exc:
-        raise src.fail((), f"YAML error: {exc}") from None
-    if node is None:
-        raise src.fail((), "the file is empty")
-    _record_lines(node, (), src)
-    try:
+        if node is None:
+            raise src.fail((), "the file is empty")
+        _record_lines(node, (), src)
         data = yaml.constructor.SafeConstructor().construct_document(node)
     except yaml.YAMLError as exc:
-        raise src.fail((), f"YAML error: {exc}") from None
+        raise _yaml_failure(exc, src) from None
     return data, src
+
+
+def _yaml_failure(exc: yaml.YAMLError, src: Source) -> BilleError:
+    """PyYAML's several-line messages as one line: the problem and its line."""
+    mark = getattr(exc, "problem_mark", None) or getattr(exc, "context_mark", None)
+    what = getattr(exc, "problem", None) or getattr(exc, "context", None) or str(exc).splitlines()[0]
+    return src.fail((), f"YAML syntax error: {what}", mark.line + 1 if mark else None)
 
 
 def load_yaml_file(path: str | Path, error: type[BilleError]) -> tuple[Any, Source]:

@@ -124,6 +124,26 @@ def solve_(instance: str, method: str, time_limit: float | None, output: str | N
     return EXIT_OK if result.schedule is not None else EXIT_NO
 
 
+@cli.group()
+def bench() -> None:
+    """Benchmarks: figures measured on this machine, with ratios to baselines of the same run."""
+
+
+@bench.command("core")
+@click.option("--size", type=click.IntRange(8, 512), default=64, show_default=True, help="Structure side for validation.")
+@click.option("--robots", type=click.IntRange(1, 200), default=20, show_default=True)
+@click.option("--steps", type=click.IntRange(1, 100_000), default=1000, show_default=True)
+@click.option("--compile-size", type=click.IntRange(8, 1024), default=128, show_default=True, help="Structure side for compiling.")
+@click.option("--seed", type=int, default=0, show_default=True)
+def bench_core(size: int, robots: int, steps: int, compile_size: int, seed: int) -> int:
+    """Time the validator on a long random schedule and the pose-table compiler."""
+    from .bench_core import report
+
+    for line in report(size, robots, steps, compile_size, seed):
+        click.echo(line)
+    return EXIT_OK
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``bille`` console script."""
     try:

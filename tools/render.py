@@ -58,3 +58,29 @@ def describe(instance: Instance) -> list[str]:
         goal = f"goal {g}" if g is not None else "no goal cell"
         out.append(f"  {robot_letter(i)} robot {i}: {where}, moveset {ms.name}{load}, {goal}")
     return out
+
+
+def motion_diagram(moveset, name: str) -> list[str]:
+    """A drawing of one motion in the local frame (heading N), from the moveset data.
+
+    Three panels, rows ``y = -2 .. 2``: *before* (``F`` front, ``B`` back, ``c`` a carried
+    tile), *after* (new feet), and the *collision set* (``o`` always, ``+`` only when carrying).
+    """
+    act = moveset.actions[moveset.index[name]]
+    point = moveset.footprint == "point"
+    before = {(0, 0): "F"} if point else {(0, 0): "F", (0, 1): "B", (0, -1): "c"}
+    after = {act.front: "F"} if point else {act.back: "B", act.front: "F"}
+    before_feet = [(0, 0)] if point else [(0, 0), (0, 1)]
+    after_feet = [act.front] + ([] if point else [act.back])
+    coll = set(before_feet) | set(after_feet) | set(act.swept) | ({act.target} if act.target else set())
+    cells = {c: "o" for c in coll}
+    for c in act.carried:
+        cells.setdefault(c, "+")
+    if act.target is not None:
+        after[act.target] = "x"
+
+    def panel(marks):
+        return [" ".join(marks.get((x, y), ".") for x in range(-2, 3)) for y in range(-2, 3)]
+
+    rows = zip(panel(before), panel(after), panel(cells))
+    return [f"{b}    {a}    {c}" for b, a, c in rows]

@@ -1,0 +1,28 @@
+"""Small builders for hand-drawn test instances."""
+from __future__ import annotations
+
+import json
+
+from bille.instances import instance_from_text
+from bille.solvers import schedule_from_text
+
+
+def make(grid: str, robots: list[dict], *, goal: str | None = None, moveset: str = "S7",
+         robot_goals=None, name: str = "test"):
+    """An instance from a drawn grid (leading/trailing blank lines and indentation removed)."""
+    lines = [f"name: {name}", f"moveset: {moveset}", "grid: |"] + ["  " + r for r in _rows(grid)]
+    if goal is not None:
+        lines += ["goal: |"] + ["  " + r for r in _rows(goal)]
+    lines.append("robots: " + json.dumps(robots))
+    if robot_goals is not None:
+        lines.append("robot_goals: " + json.dumps(robot_goals))
+    return instance_from_text("\n".join(lines) + "\n", name)
+
+
+def sched(*rows: str):
+    """A schedule from one whitespace-separated action string per robot."""
+    return schedule_from_text("robots:\n" + "".join(f"  - [{', '.join(r.split())}]\n" for r in rows))
+
+
+def _rows(text: str) -> list[str]:
+    return [r.strip() for r in text.strip().splitlines()]

@@ -1,0 +1,105 @@
+"""The bille command: exit codes, JSON output, and one clear line for bad input."""
+import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+
+from bille.instances import load_instance
+from bille.instances.bundled import bundled_names, bundled_path
+from bille.solvers import load_schedule, validate
+from bille.tools.cli import main
+
+DATA = Path(__file__).parent / "data"
+CASES = yaml.safe_load((DATA / "cases.yaml").read_text())
+
+
+def run(capsys, *argv):
+    with pytest.raises(SystemExit) as info:
+        main(list(argv))
+    out, err = capsys.readouterr()
+    return info.value.code, out, err
+
+
+@pytest.mark.parametrize("case", CASES, ids=[f"{c['schedule']}" for c in CASES])
+def test_check_agrees_with_the_rules(case, capsys):
+    inst, sched = str(DATA / case["instance"]), str(DATA / case["schedule"])
+    code, out, err = run(capsys, "check", inst, sched, "--json")
+    assert code == case["exit"], err
+    if code == 2:
+        assert out == "" and err.count("\n") == 1 and "Traceback" not in err
+        return
+    verdict = json.loads(out)
+    assert set(verdict) == {"valid", "violation", "metrics"}
+    report = validate(load_instance(inst), load_schedule(sched))
+    assert verdict == report.to_json()
+    if case["exit"] == 0:
+        assert verdict["valid"] and verdict["violation"] is None
+        assert set(verdict["metrics"]) == {"makespan", "tiles_traveled", "waits", "picks", "places"}
+    else:
+        v = verdict["violation"]
+        assert not verdict["valid"]
+        assert (v["step"], v["rule"], v["robot"], v["cells"]) == (case["step"], case["rule"], case["robot"], case["cells"])
+
+
+@pytest.mark.parametrize("name", bundled_names())
+def test_check_accepts_every_bundled_schedule_by_name(name, capsys):
+    code, out, _ = run(capsys, "check", name, f"{name}.schedule")
+    assert code == 0 and out.startswith("valid: makespan")
+
+
+def test_check_text_names_the_violation(capsys):
+    code, out, _ = run(capsys, "check", str(DATA / "line.yaml"), str(DATA / "line.collision.yaml"))
+    assert code == 1
+    assert out.strip() == "invalid: step 2, robot 0, rule collision: robots 0 and 1 both need (3, 1)"
+
+
+def test_show_draws_robots_and_reports_validity(capsys):
+    code, out, _ = run(capsys, "show", "corridor-2")
+    assert code == 0
+    assert "10x4 grid" in out and "instance: valid" in out
+    assert ".TaATT*Bb." in out  # robot A heading east, robot B heading west carrying a tile
+
+
+def test_show_marks_an_invalid_instance(tmp_path, capsys):
+    text = (DATA / "line.yaml").read_text().replace("TTTTTT", "TT.TTT").replace("front: [1, 1], back: [0, 1]", "front: [1, 1], back: [0, 1]")
+    (tmp_path / "split.yaml").write_text(text)
+    code, out, _ = run(capsys, "show", str(tmp_path / "split.yaml"))
+    assert code == 1 and "INVALID" in out and "not 4-connected" in out
+
+
+def test_list_names_the_bundled_instances(capsys):
+    code, out, _ = run(capsys, "list")
+    assert code == 0 and all(name in out for name in bundled_names())
+
+
+def test_solve_writes_a_valid_schedule(tmp_path, capsys):
+    out_path = tmp_path / "s.yaml"
+    code, out, _ = run(capsys, "solve", "crowded-2", "--method", "bfs", "-o", str(out_path), "--json")
+    result = json.loads(out)
+    assert code == 0 and result["status"] == "optimal" and result["metrics"]["makespan"] == 10
+    assert validate(load_instance(bundled_path("crowded-2")), load_schedule(out_path)).valid
+
+
+@pytest.mark.parametrize("argv", [
+    ["check", "corridor-2"],
+    ["frobnicate"],
+    ["solve", "corridor-2", "--time-limit", "0"],
+    ["solve", "corridor-2", "--method", "magic"],
+    ["show", "no-such-instance"],
+])
+def test_usage_errors_are_one_line_and_exit_2(argv, capsys):
+    code, out, err = run(capsys, *argv)
+    assert code == 2 and out == "" and err.count("\n") == 1 and "Traceback" not in err
+
+
+def test_the_installed_console_script(tmp_path):
+    exe = shutil.which("bille") or str(Path(sys.executable).parent / "bille")
+    version = subprocess.run([exe, "--version"], capture_output=True, text=True)
+    assert version.returncode == 0 and version.stdout.startswith("bille ")
+    bad = subprocess.run([exe, "check", str(DATA / "ragged.instance.yaml"), "x"], capture_output=True, text=True)
+    assert bad.returncode == 2 and bad.stdout == ""
+    assert bad.stderr.strip() == f"bille: error: {DATA / 'ragged.instance.yaml'}:3: grid: row 1 has 2 cells, expected 3 like row 0 (the grid must be a rectangle)"
