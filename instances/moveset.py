@@ -27,6 +27,7 @@ from .yamlsource import (
     expect_str,
     expect_xy,
     load_yaml_file,
+    load_yaml_text,
 )
 
 BUILTIN = ("S5", "S7", "point")
@@ -140,8 +141,6 @@ _CACHE: dict[str, Moveset] = {}
 def _builtin(name: str) -> Moveset:
     if name not in _CACHE:
         text = resources.files(__package__).joinpath("movesets", f"{name}.yaml").read_text()
-        from .yamlsource import load_yaml_text
-
         data, src = load_yaml_text(text, f"<builtin moveset {name}>", MovesetError)
         _CACHE[name] = parse_moveset(data, src, name)
     return _CACHE[name]

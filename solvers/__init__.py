@@ -5,6 +5,7 @@ the command line and the parametrized tests read it.
 """
 from __future__ import annotations
 
+import inspect
 import time
 from typing import Callable
 
@@ -34,13 +35,14 @@ def solve(instance: Instance, method: str, **options) -> Result:
     """
     if method not in METHODS:
         raise OptionError(f"unknown method '{method}' (expected one of: {', '.join(METHODS)})")
+    plan = METHODS[method]
+    accepted = inspect.signature(plan).parameters
+    for name in options:
+        if name not in accepted:
+            known = ", ".join(p for p in accepted if p != "instance")
+            raise OptionError(f"{method}: unknown option '{name}' (expected one of: {known})")
     start = time.perf_counter()
-    try:
-        result = METHODS[method](instance, **options)
-    except TypeError as exc:
-        if "unexpected keyword argument" in str(exc):
-            raise OptionError(f"{method}: {exc}".replace("plan() got an ", "")) from None
-        raise
+    result = plan(instance, **options)
     elapsed = time.perf_counter() - start
     fields = dict(method=method, status=result.status, schedule=result.schedule, metrics=result.metrics,
                   lower_bound=result.lower_bound, time_s=elapsed, stats=dict(result.stats))

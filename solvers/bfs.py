@@ -50,8 +50,8 @@ def plan(instance: Instance, *, time_limit: float | None = None, max_steps: int 
     Parameters
     ----------
     time_limit : seconds before giving up (status ``timeout``), None for no limit.
-    max_steps : horizon cap; no goal within it and nothing left to expand below it -> ``infeasible``
-        only if the whole state space was exhausted, else ``timeout``.
+    max_steps : horizon cap; without a goal within it the status is ``timeout`` with lower bound
+        ``max_steps + 1``. ``infeasible`` means the whole reachable state space was exhausted.
     max_states : stop (status ``timeout``) after storing this many states.
     """
     if max_steps < 0 or max_states < 1:
@@ -80,7 +80,9 @@ def plan(instance: Instance, *, time_limit: float | None = None, max_steps: int 
         nxt = []
         for s in frontier:
             if deadline is not None and time.perf_counter() > deadline or len(parent) > max_states:
-                return Result("bfs", "timeout", lower_bound=depth, stats=stats(), time_s=time.perf_counter() - start)
+                # every state within `depth` steps has been checked: the optimum is larger
+                return Result("bfs", "timeout", lower_bound=depth + 1, stats=stats(),
+                              time_s=time.perf_counter() - start)
             expanded += 1
             options = [candidate_actions(instance, s, i) for i in range(instance.num_robots)]
             for joint in _disjoint_products(instance, s, options):
@@ -92,9 +94,9 @@ def plan(instance: Instance, *, time_limit: float | None = None, max_steps: int 
                         nxt.append(new)
         frontier = nxt
         depth += 1
-    status = "timeout" if truncated else "infeasible"
-    return Result("bfs", status, lower_bound=depth + (1 if truncated else 0), stats=stats(),
-                  time_s=time.perf_counter() - start)
+    if truncated:  # no goal within max_steps
+        return Result("bfs", "timeout", lower_bound=max_steps + 1, stats=stats(), time_s=time.perf_counter() - start)
+    return Result("bfs", "infeasible", stats=stats(), time_s=time.perf_counter() - start)
 
 
 def _disjoint_products(instance: Instance, state: State, options: list[list[int]]):

@@ -16,10 +16,10 @@ import tracemalloc
 
 import numpy as np
 
-from bille.instances import Grid, Instance, Robot, compile_posegraph, load_moveset
+from bille.instances import Grid, Instance, Robot, compile_posegraph, load_moveset, posegraph
 from bille.instances.grid import is_connected
 from bille.instances.rules import State, apply
-from bille.solvers import Schedule, dump_schedule, schedule_from_text, validate
+from bille.solvers import Schedule, bind, dump_schedule, schedule_from_text, validate
 from bille.solvers.bfs import candidate_actions
 
 
@@ -106,8 +106,6 @@ def bench_validate(size: int = 64, robots: int = 20, steps: int = 1000, seed: in
 
 def _bare_replay(inst: Instance, sched: Schedule):
     """Baseline: follow the successor tables with no rule checks at all."""
-    from bille.solvers import bind
-
     ids = bind(inst, sched)
     poses = np.array(inst.start_state.poses)
     g = inst.world.graphs[0]
@@ -122,10 +120,8 @@ def bench_compile(size: int = 128) -> list[dict]:
     for name in ("S5", "S7", "point"):
         ms = load_moveset(name)
         tracemalloc.start()
+        posegraph._CACHE.clear()  # time a real compilation, not a cache hit
         t0 = time.perf_counter()
-        from bille.instances import posegraph
-
-        posegraph._CACHE.clear()
         g = compile_posegraph(ms, size, size, obstacles)
         t_compile = time.perf_counter() - t0
         peak = tracemalloc.get_traced_memory()[1]

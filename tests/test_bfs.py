@@ -1,0 +1,55 @@
+"""The reference breadth-first solver: optimal makespans, proofs of infeasibility, limits."""
+import pytest
+
+from bille.instances import OptionError
+from bille.solvers import METHODS, solve, validate
+from helpers import make
+
+
+def test_point_robot_walks_the_shortest_route():
+    inst = make("TTTT\nT..T\nTTTT", [{"at": [0, 0]}], moveset="point", robot_goals=[[3, 2]])
+    result = solve(inst, "bfs")
+    assert result.status == "optimal" and result.metrics.makespan == 5
+    assert validate(inst, result.schedule).valid
+
+
+def test_two_robots_must_take_turns_in_a_corridor():
+    # both want to cross the single cell (2, 0); the optimum makes one wait or detour
+    inst = make("TTTTT\n..T..", [{"at": [0, 0]}, {"at": [4, 0]}], moveset="point", robot_goals=[[4, 0], [0, 0]])
+    result = solve(inst, "bfs")
+    assert result.status == "optimal"
+    assert validate(inst, result.schedule).valid
+    # robot 1 steps into the bay (2, 1) by step 3; robot 0 may enter (2, 0) only a step after
+    # robot 1 has left it (no following), crosses by step 6; robot 1 is home at step 8
+    assert result.metrics.makespan == 8
+
+
+def test_reconfiguration_needs_a_pick_and_a_place():
+    inst = make("TTT.\n....", [{"at": [1, 0]}], goal="TT..\n.T..", moveset="point")
+    result = solve(inst, "bfs")
+    assert result.status == "optimal" and result.metrics.makespan == 2
+    assert (result.metrics.picks, result.metrics.places) == (1, 1)
+
+
+def test_a_robot_that_cannot_turn_around_is_proved_infeasible():
+    # an S5 robot heading east on a line of three tiles must turn around to put its front foot
+    # on (0, 0); turning needs tiles beside the line, and the search shows that moving the one
+    # spare tile never makes room
+    stuck = make("TTT\n...", [{"front": [1, 0], "back": [0, 0]}], moveset="S5", robot_goals=[[0, 0]])
+    result = solve(stuck, "bfs")
+    assert result.status == "infeasible" and result.schedule is None
+
+
+def test_limits_give_timeout_with_a_lower_bound():
+    inst = make("TTTTTTTT", [{"at": [0, 0]}], moveset="point", robot_goals=[[7, 0]])
+    result = solve(inst, "bfs", max_steps=3)
+    assert result.status == "timeout" and result.lower_bound == 4 and result.schedule is None
+
+
+def test_unknown_options_are_rejected():
+    inst = make("TT", [{"at": [0, 0]}], moveset="point")
+    with pytest.raises(OptionError, match="unknown option 'horizon'"):
+        solve(inst, "bfs", horizon=3)
+    with pytest.raises(OptionError, match="unknown method"):
+        solve(inst, "magic")
+    assert "bfs" in METHODS
