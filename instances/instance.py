@@ -59,7 +59,11 @@ class Task:
 
 @dataclass(frozen=True)
 class Instance:
-    """A reconfiguration (or path-planning) problem. See the module docstring."""
+    """A reconfiguration (or path-planning) problem. See the module docstring.
+
+    Building one in code does not check it: pass it through :func:`check_instance` (files are
+    checked when loaded).
+    """
 
     name: str
     moveset: Moveset
@@ -105,6 +109,9 @@ class Instance:
     @cached_property
     def start_state(self) -> State:
         poses = tuple(g.pose_of(r.front, r.back) for g, r in zip(self.world.graphs, self.robots))
+        if -1 in poses:
+            i = poses.index(-1)
+            raise InstanceError(f"{self.name}: robots[{i}]: its feet form no valid pose (see check_instance)")
         return State(self.start.tiles, poses, tuple(r.carrying for r in self.robots))
 
     @property

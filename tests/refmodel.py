@@ -75,18 +75,7 @@ def motion(robot, name):
 
 
 def connected(tiles):
-    if not tiles:
-        return False
-    start = next(iter(tiles))
-    seen, todo = {start}, deque([start])
-    while todo:
-        c = todo.popleft()
-        for d in HEADING.values():
-            n = add(c, d)
-            if n in tiles and n not in seen:
-                seen.add(n)
-                todo.append(n)
-    return len(seen) == len(tiles)
+    return len(components(tiles)) == 1
 
 
 def components(tiles):

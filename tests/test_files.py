@@ -107,7 +107,11 @@ def test_bad_instance_is_one_clear_error(what, text, line, words, tmp_path):
     path.write_text(text)
     with pytest.raises(InstanceError) as info:
         load_instance(path)
-    message = str(info.value)
+    assert_one_clear_line(str(info.value), path, line, words)
+
+
+def assert_one_clear_line(message, path, line, words):
+    """One line, starting with ``file:line:``, holding the words that say what is wrong."""
     assert "\n" not in message
     prefix = f"{path}:{line}: " if line is not None else f"{path}: "
     assert message.startswith(prefix), message
@@ -145,12 +149,7 @@ def test_bad_schedule_is_one_clear_error(what, text, line, words, tmp_path):
     path.write_text(text)
     with pytest.raises(ScheduleError) as info:
         validate(inst, load_schedule(path))
-    message = str(info.value)
-    assert "\n" not in message
-    prefix = f"{path}:{line}: " if line is not None else f"{path}: "
-    assert message.startswith(prefix), message
-    for word in words:
-        assert word in message, message
+    assert_one_clear_line(str(info.value), path, line, words)
 
 
 def test_save_does_not_leave_partial_files(tmp_path):
