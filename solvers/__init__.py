@@ -7,19 +7,14 @@ from __future__ import annotations
 
 import inspect
 import time
-from typing import Callable
 
 from bille.instances import Instance, OptionError
 
-from . import bfs
 from .metrics import Metrics, metrics
+from .registry import METHODS
 from .result import STATUSES, Result
 from .schedule import Schedule, bind, dump_schedule, load_schedule, save_schedule, schedule_from_text
 from .validate import Report, validate
-
-METHODS: dict[str, Callable[..., Result]] = {
-    "bfs": bfs.plan,
-}
 
 
 def solve(instance: Instance, method: str, **options) -> Result:

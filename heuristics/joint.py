@@ -1,0 +1,143 @@
+"""Joint states of all robots walking on a fixed structure (paper, Methods, "Graph representation").
+
+Shared by joint A* and M*. A joint state is a tuple of poses plus, per robot, a *debt*: the
+number of steps it has waited at its goal for free. The objective is the sum of costs: each
+robot pays 1 per step until it reaches its goal for the last time, waiting included. A step
+that starts and ends at the goal is free but adds to the debt, and a robot that leaves its goal
+pays its debt then. States are tuples of ints; costs are pairs ``(sum of costs, makespan)``,
+compared lexicographically ("ties broken by makespan").
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Iterator
+
+import numpy as np
+
+from bille.instances import Instance, OptionError
+
+from .walking import UNREACHABLE, Walk, walk_for
+
+Poses = tuple[int, ...]
+Debts = tuple[int, ...]
+
+
+@dataclass
+class JointProblem:
+    """A path-planning instance as a search problem over joint states."""
+
+    instance: Instance
+    walks: list[Walk]
+    goals: tuple[int, ...]  # front-foot goal cell per robot, -1 = anywhere
+    dists: list[np.ndarray]  # per robot: steps from each pose to its goal (0 everywhere if none)
+
+    @classmethod
+    def of(cls, instance: Instance) -> "JointProblem":
+        require_path_planning(instance)
+        tiles = instance.start.tiles
+        walks = [walk_for(g, tiles) for g in instance.world.graphs]
+        goals = instance.goal_cells
+        dists = [w.distances(c) if c >= 0 else np.zeros(w.succ.shape[0], np.int32) for w, c in zip(walks, goals)]
+        return cls(instance, walks, goals, dists)
+
+    @property
+    def start(self) -> Poses:
+        return tuple(self.instance.start_state.poses)
+
+    def unreachable(self) -> list[int]:
+        """Robots that cannot reach their goal cell even alone."""
+        return [i for i, (d, p) in enumerate(zip(self.dists, self.start)) if d[p] >= UNREACHABLE]
+
+    def at_goal(self, i: int, pose: int) -> bool:
+        return self.goals[i] < 0 or int(self.walks[i].graph.feet[pose, 0]) == self.goals[i]
+
+    def is_goal(self, poses: Poses) -> bool:
+        return all(self.at_goal(i, p) for i, p in enumerate(poses))
+
+    def h(self, poses: Poses) -> tuple[int, int]:
+        """Admissible, consistent estimate: (sum, max) of the robots' distances to their goals."""
+        ds = [int(d[p]) for d, p in zip(self.dists, poses)]
+        return sum(ds), max(ds, default=0)
+
+    def step_cost(self, i: int, p: int, q: int, debt: int) -> tuple[int, int]:
+        """(cost, new debt) of robot ``i`` moving from pose ``p`` to ``q`` in one step."""
+        if self.goals[i] < 0:
+            return 0, 0
+        was, now = self.at_goal(i, p), self.at_goal(i, q)
+        if was and now:
+            return 0, debt + 1
+        return (1 + debt if was else 1), 0
+
+    def moves(self, i: int, pose: int, only: int | None = None):
+        """Robot ``i``'s walking moves from ``pose``: ``(action, next pose, cells)``; with
+        ``only`` given, just the move to that pose."""
+        options = self.walks[i].moves(pose)
+        return options if only is None else [m for m in options if m[1] == only][:1]
+
+    def joint_moves(self, poses: Poses, options: list[list]) -> Iterator[tuple[tuple[int, ...], Poses]]:
+        """Joint actions from per-robot move lists whose collision sets are pairwise disjoint
+        (DESIGN §3 rule 3; rules 1, 2 and 4 hold for every walking move on a fixed structure)."""
+        m = len(options)
+        actions, nxt = [0] * m, [0] * m
+
+        def extend(i: int, used: frozenset):
+            if i == m:
+                yield tuple(actions), tuple(nxt)
+                return
+            for a, q, cells in options[i]:
+                if used.isdisjoint(cells):
+                    actions[i], nxt[i] = a, q
+                    yield from extend(i + 1, used | cells)
+
+        yield from extend(0, frozenset())
+
+    def collisions(self, choice: list[tuple[int, int, frozenset]]) -> frozenset[int]:
+        """Robots whose collision sets meet another's in one joint move (M*'s Psi)."""
+        hit = set()
+        for i in range(len(choice)):
+            for j in range(i + 1, len(choice)):
+                if not choice[i][2].isdisjoint(choice[j][2]):
+                    hit.update((i, j))
+        return frozenset(hit)
+
+    def transition(self, poses: Poses, debts: Debts, nxt: Poses) -> tuple[int, Debts]:
+        """Sum-of-costs increment and new debts of a joint step."""
+        total, new = 0, []
+        for i, (p, q, d) in enumerate(zip(poses, nxt, debts)):
+            c, nd = self.step_cost(i, p, q, d)
+            total += c
+            new.append(nd)
+        return total, tuple(new)
+
+
+def require_path_planning(instance: Instance) -> None:
+    """The walking planners plan on a structure that does not change."""
+    if instance.is_reconfiguration:
+        raise OptionError(
+            f"instance '{instance.name}' moves tiles; astar, mstar and temporal-astar plan robot paths "
+            "on a fixed structure (path-planning instances: no goal grid that differs, no carried tiles)")
+
+
+def schedule_ids(instance: Instance, steps: list[tuple[int, ...]]) -> np.ndarray:
+    """``int[m, L]`` action ids from a list of joint actions."""
+    m = instance.num_robots
+    if not steps:
+        return np.zeros((m, 0), dtype=np.int64)
+    return np.array(steps, dtype=np.int64).T.reshape(m, len(steps))
+
+
+def to_result(instance: Instance, method: str, status: str, steps: list | None, *, lower_bound: int | None,
+              stats: dict):
+    """A :class:`~bille.solvers.result.Result` from a list of joint actions (or None)."""
+    from bille.solvers.result import Result
+    from bille.solvers.schedule import Schedule
+
+    schedule = None
+    if steps is not None:
+        schedule = Schedule.from_ids(instance, schedule_ids(instance, steps), meta={"method": method})
+    return Result(method, status, schedule, lower_bound=lower_bound, stats=stats)
+
+
+def makespan_bound(problem: JointProblem) -> int:
+    """No schedule is shorter than the farthest robot's distance to its goal."""
+    return problem.h(problem.start)[1]
