@@ -31,6 +31,12 @@ class JointProblem:
     goals: tuple[int, ...]  # front-foot goal cell per robot, -1 = anywhere
     dists: list[np.ndarray]  # per robot: steps from each pose to its goal (0 everywhere if none)
 
+    def __post_init__(self) -> None:
+        # Python lists for the inner loops: indexing numpy per call costs more than the search
+        self._dist = [d.tolist() for d in self.dists]
+        self._home = [[True] * w.succ.shape[0] if c < 0 else (w.graph.feet[:, 0] == c).tolist()
+                      for w, c in zip(self.walks, self.goals)]
+
     @classmethod
     def of(cls, instance: Instance) -> "JointProblem":
         require_path_planning(instance)
@@ -49,24 +55,24 @@ class JointProblem:
         return [i for i, (d, p) in enumerate(zip(self.dists, self.start)) if d[p] >= UNREACHABLE]
 
     def at_goal(self, i: int, pose: int) -> bool:
-        return self.goals[i] < 0 or int(self.walks[i].graph.feet[pose, 0]) == self.goals[i]
+        return self._home[i][pose]
 
     def is_goal(self, poses: Poses) -> bool:
-        return all(self.at_goal(i, p) for i, p in enumerate(poses))
+        return all(home[p] for home, p in zip(self._home, poses))
 
     def h(self, poses: Poses) -> tuple[int, int]:
         """Admissible, consistent estimate: (sum, max) of the robots' distances to their goals."""
-        ds = [int(d[p]) for d, p in zip(self.dists, poses)]
+        ds = [d[p] for d, p in zip(self._dist, poses)]
         return sum(ds), max(ds, default=0)
 
     def step_cost(self, i: int, p: int, q: int, debt: int) -> tuple[int, int]:
         """(cost, new debt) of robot ``i`` moving from pose ``p`` to ``q`` in one step."""
         if self.goals[i] < 0:
             return 0, 0
-        was, now = self.at_goal(i, p), self.at_goal(i, q)
-        if was and now:
-            return 0, debt + 1
-        return (1 + debt if was else 1), 0
+        home = self._home[i]
+        if home[p]:
+            return (0, debt + 1) if home[q] else (1 + debt, 0)
+        return 1, 0
 
     def moves(self, i: int, pose: int, only: int | None = None):
         """Robot ``i``'s walking moves from ``pose``: ``(action, next pose, cells)``; with
@@ -103,10 +109,15 @@ class JointProblem:
     def transition(self, poses: Poses, debts: Debts, nxt: Poses) -> tuple[int, Debts]:
         """Sum-of-costs increment and new debts of a joint step."""
         total, new = 0, []
-        for i, (p, q, d) in enumerate(zip(poses, nxt, debts)):
-            c, nd = self.step_cost(i, p, q, d)
-            total += c
-            new.append(nd)
+        for home, p, q, d in zip(self._home, poses, nxt, debts):
+            if home[p]:  # robots without a goal are always home and never pay
+                if home[q]:
+                    new.append(d + 1)
+                    continue
+                total += 1 + d
+            else:
+                total += 1
+            new.append(0)
         return total, tuple(new)
 
 

@@ -11,6 +11,11 @@ end up coupling every robot and M* becomes joint A*.
 Collisions here happen on transitions, so a transition's colliding robots join the collision set
 of the vertex the transition leaves: that is where their choices must differ.
 
+*Operator decomposition* (``od=True``, Standley; ODrM* of Ferner, Wagner & Choset) expands the
+coupled robots one at a time through intermediate nodes, so a fully coupled vertex of ``k``
+robots with ``b`` moves each has ``b`` children instead of ``b**k``, and the heuristic prunes
+partial assignments early.
+
 The objective is the sum of costs, ties broken by makespan, as for joint A*; ``epsilon``
 inflates the heuristic (``f = g + epsilon * h``) for a sum of costs within ``epsilon`` times the
 optimum.
@@ -25,93 +30,190 @@ from bille.instances import Instance, OptionError
 
 from .joint import JointProblem, makespan_bound, to_result
 
+INF = (1 << 60, 0)
 
-def plan(instance: Instance, *, epsilon: float = 1.0, time_limit: float | None = None,
+
+def plan(instance: Instance, *, epsilon: float = 1.0, od: bool = True, time_limit: float | None = None,
          max_expansions: int = 5_000_000):
     """M*: minimum sum of costs (then makespan) on a fixed structure.
 
     Parameters
     ----------
     epsilon : inflation of the heuristic (>= 1); 1 gives optimal plans.
+    od : expand coupled robots one at a time (operator decomposition).
     time_limit : seconds before giving up with status ``timeout``.
-    max_expansions : expansions before giving up with status ``timeout``.
+    max_expansions : expansions (of vertices and intermediate nodes) before ``timeout``.
     """
     if epsilon < 1:
         raise OptionError(f"mstar: epsilon must be >= 1, got {epsilon}")
-    start_time = time.perf_counter()
-    deadline = None if time_limit is None else start_time + time_limit
-    problem = JointProblem.of(instance)
-    bound = makespan_bound(problem)
-    stats = {"objective": "sum of costs, then makespan", "epsilon": epsilon, "expanded": 0,
-             "generated": 0, "largest_collision_set": 0}
-    if problem.unreachable():
-        stats["unreachable"] = problem.unreachable()
-        return to_result(instance, "mstar", "infeasible", None, lower_bound=None, stats=stats)
+    return _MStar(instance, epsilon, od, time_limit, max_expansions).run()
 
-    m = instance.num_robots
-    policy = [_policy(problem, i) for i in range(m)]
-    root = (problem.start, (0,) * m)
-    g = {root: (0, 0)}
-    parent: dict = {root: None}
-    collision: dict = {root: frozenset()}
-    back: dict = {root: set()}
-    expanded_as: dict = {}  # vertex -> (g, collision set) of its last expansion
-    counter = itertools.count()
-    frontier: list = []
 
-    def push(key):
-        h = problem.h(key[0])
-        gk = g[key]
-        heapq.heappush(frontier, (gk[0] + epsilon * h[0], gk[1] + h[1], next(counter), key))
+class _MStar:
+    def __init__(self, instance, epsilon, od, time_limit, max_expansions):
+        self.instance, self.epsilon, self.od = instance, epsilon, od
+        self.deadline = None if time_limit is None else time.perf_counter() + time_limit
+        self.max_expansions = max_expansions
+        self.problem = JointProblem.of(instance)
+        self.policy = [_policy(self.problem, i) for i in range(instance.num_robots)]
+        self.stats = {"objective": "sum of costs, then makespan", "epsilon": epsilon, "od": od,
+                      "expanded": 0, "generated": 0, "largest_collision_set": 0}
+        self.g: dict = {}
+        self.parent: dict = {}
+        self.collision: dict = {}
+        self.back: dict = {}
+        self.expanded_as: dict = {}
+        self.counter = itertools.count()
+        self.frontier: list = []
 
-    def backprop(key, robots: frozenset):
+    # ---- bookkeeping -------------------------------------------------------------------------
+
+    def push(self, node, g, h):
+        heapq.heappush(self.frontier, (g[0] + self.epsilon * h[0], g[1] + h[1], next(self.counter), node))
+
+    def push_vertex(self, key):
+        self.push(key, self.g[key], self.problem.h(key[0]))
+
+    def backprop(self, key, robots: frozenset):
         todo = [(key, robots)]
         while todo:
             v, c = todo.pop()
-            if c <= collision[v]:
+            if c <= self.collision[v]:
                 continue
-            collision[v] = collision[v] | c
-            stats["largest_collision_set"] = max(stats["largest_collision_set"], len(collision[v]))
-            push(v)
-            todo.extend((u, collision[v]) for u in back[v])
+            self.collision[v] = self.collision[v] | c
+            self.stats["largest_collision_set"] = max(self.stats["largest_collision_set"], len(self.collision[v]))
+            self.push_vertex(v)
+            todo.extend((u, self.collision[v]) for u in self.back[v])
 
-    push(root)
-    while frontier:
-        _, _, _, key = heapq.heappop(frontier)
-        state = (g[key], collision[key])
-        if expanded_as.get(key) == state:
-            continue  # stale: already expanded with this cost and collision set
-        expanded_as[key] = state
+    def reach(self, root, actions, nxt, new_debts, new_g):
+        """Record a transition from vertex ``root`` to the vertex ``(nxt, new_debts)``."""
+        child = (nxt, new_debts)
+        if child not in self.g:
+            self.g[child], self.collision[child], self.back[child] = INF, frozenset(), set()
+        self.back[child].add(root)
+        if self.collision[child]:
+            self.backprop(root, self.collision[child])
+        if new_g < self.g[child]:
+            self.g[child] = new_g
+            self.parent[child] = (root, actions)
+            self.stats["generated"] += 1
+            self.push_vertex(child)
+
+    # ---- search ------------------------------------------------------------------------------
+
+    def run(self):
+        problem, stats, instance = self.problem, self.stats, self.instance
+        bound = makespan_bound(problem)
+        if problem.unreachable():
+            stats["unreachable"] = problem.unreachable()
+            return to_result(instance, "mstar", "infeasible", None, lower_bound=None, stats=stats)
+        root = (problem.start, (0,) * instance.num_robots)
+        self.g[root], self.parent[root], self.collision[root], self.back[root] = (0, 0), None, frozenset(), set()
+        self.push_vertex(root)
+        while self.frontier:
+            *_, node = heapq.heappop(self.frontier)
+            if node[0] == "od":
+                self.expand_partial(node)
+                continue
+            state = (self.g[node], self.collision[node])
+            if self.expanded_as.get(node) == state:
+                continue  # stale: already expanded with this cost and collision set
+            self.expanded_as[node] = state
+            if problem.is_goal(node[0]):
+                stats["sum_of_costs"] = self.g[node][0]
+                status = "optimal" if self.epsilon == 1 else "feasible"
+                return to_result(instance, "mstar", status, _unwind(self.parent, node), lower_bound=bound, stats=stats)
+            stats["expanded"] += 1
+            if stats["expanded"] > self.max_expansions or (self.deadline is not None and time.perf_counter() > self.deadline):
+                return to_result(instance, "mstar", "timeout", None, lower_bound=bound, stats=stats)
+            self.expand(node)
+        return to_result(instance, "mstar", "infeasible", None, lower_bound=None, stats=stats)
+
+    def expand(self, key):
+        problem = self.problem
         poses, debts = key
-        if problem.is_goal(poses):
-            stats["sum_of_costs"] = g[key][0]
-            status = "optimal" if epsilon == 1 else "feasible"
-            return to_result(instance, "mstar", status, _unwind(parent, key), lower_bound=bound, stats=stats)
-        stats["expanded"] += 1
-        if stats["expanded"] > max_expansions or (deadline is not None and time.perf_counter() > deadline):
-            return to_result(instance, "mstar", "timeout", None, lower_bound=bound, stats=stats)
-
-        coupled = collision[key]
-        options = [problem.moves(i, p) if i in coupled else policy[i](p) for i, p in enumerate(poses)]
-        psi = _colliding(problem, options, coupled)
+        coupled = self.collision[key]
+        options = [problem.moves(i, p) if i in coupled else self.policy[i](p) for i, p in enumerate(poses)]
+        psi = _colliding(options, coupled)
         if psi:
-            backprop(key, psi)
-        g_soc, g_t = g[key]
-        for actions, nxt in problem.joint_moves(poses, options):
+            self.backprop(key, psi)
+        g_soc, g_t = self.g[key]
+        if not self.od or len(coupled) <= 1:
+            for actions, nxt in problem.joint_moves(poses, options):
+                cost, new_debts = problem.transition(poses, debts, nxt)
+                self.reach(key, actions, nxt, new_debts, (g_soc + cost, g_t + 1))
+            return
+        # operator decomposition: the uncoupled robots move by policy now, the coupled ones
+        # are assigned one at a time by expand_partial
+        order = tuple(sorted(coupled))
+        fixed = {i: options[i][0] for i in range(len(poses)) if i not in coupled and options[i]}
+        if len(fixed) + len(coupled) < len(poses):
+            return  # an uncoupled robot has no move at all (cannot happen: waiting is a move)
+        partial = ("od", key, order, ())
+        self.push(partial, (g_soc, g_t + 1), self._partial_h(poses, order, (), {}))
+
+    def expand_partial(self, node):
+        """Assign the next coupled robot's move (operator decomposition)."""
+        _, root, order, assigned = node
+        if self.collision[root] != frozenset(order):
+            return  # the root's collision set grew: it was expanded again with the larger set
+        problem, poses, debts = self.problem, root[0], root[1]
+        self.stats["expanded"] += 1
+        j = len(assigned)
+        robot = order[j]
+        taken = [cells for (_, _, cells) in assigned]
+        coupled = frozenset(order)
+        uncoupled = {i: self.policy[i](p)[0] for i, p in enumerate(poses) if i not in coupled}
+        for a, q, cells in problem.moves(robot, poses[robot]):
+            if any(not cells.isdisjoint(t) for t in taken):
+                continue
+            hit = frozenset(i for i, m in uncoupled.items() if not cells.isdisjoint(m[2]))
+            if hit:
+                self.backprop(root, hit | {robot})
+                continue
+            now = assigned + ((a, q, cells),)
+            if len(now) < len(order):
+                g = self._partial_g(root, order, now, uncoupled)
+                self.push(("od", root, order, now), g, self._partial_h(poses, order, now, uncoupled))
+                continue
+            actions = [0] * len(poses)
+            nxt = list(poses)
+            for r, (aa, qq, _) in zip(order, now):
+                actions[r], nxt[r] = aa, qq
+            for i, m in uncoupled.items():
+                actions[i], nxt[i] = m[0], m[1]
+            nxt = tuple(nxt)
             cost, new_debts = problem.transition(poses, debts, nxt)
-            child = (nxt, new_debts)
-            if child not in g:
-                g[child], collision[child], back[child] = (1 << 60, 0), frozenset(), set()
-            back[child].add(key)
-            if collision[child]:
-                backprop(key, collision[child])
-            new_g = (g_soc + cost, g_t + 1)
-            if new_g < g[child]:
-                g[child] = new_g
-                parent[child] = (key, actions)
-                stats["generated"] += 1
-                push(child)
-    return to_result(instance, "mstar", "infeasible", None, lower_bound=None, stats=stats)
+            g_soc, g_t = self.g[root]
+            self.reach(root, tuple(actions), nxt, new_debts, (g_soc + cost, g_t + 1))
+
+    def _partial_h(self, poses, order, assigned, uncoupled):
+        """Heuristic of a partial step: moved robots from their new pose; a robot still to be
+        assigned has this step ahead of it, so it counts its distance for the sum of costs and
+        one less for the makespan (both admissible and consistent along the chain)."""
+        dist = self.problem._dist
+        moved = {r: q for r, (_, q, _) in zip(order, assigned)}
+        moved.update((i, m[1]) for i, m in uncoupled.items())
+        soc, span = 0, 0
+        for i, p in enumerate(poses):
+            if i in moved:
+                d = dist[i][moved[i]]
+                soc, span = soc + d, max(span, d)
+            else:
+                d = dist[i][p]
+                soc, span = soc + d, max(span, d - 1)
+        return soc, span
+
+    def _partial_g(self, root, order, assigned, uncoupled):
+        """Cost so far of a partial step: the root's cost plus the moves assigned (and the
+        uncoupled robots' policy moves)."""
+        problem, (poses, debts) = self.problem, root
+        g_soc, g_t = self.g[root]
+        for r, (_, q, _) in zip(order, assigned):
+            g_soc += problem.step_cost(r, poses[r], q, debts[r])[0]
+        for i, m in uncoupled.items():
+            g_soc += problem.step_cost(i, poses[i], m[1], debts[i])[0]
+        return g_soc, g_t + 1
 
 
 def _policy(problem: JointProblem, i: int):
@@ -127,12 +229,11 @@ def _policy(problem: JointProblem, i: int):
     return move
 
 
-def _colliding(problem: JointProblem, options: list[list], coupled: frozenset) -> frozenset:
+def _colliding(options: list[list], coupled: frozenset) -> frozenset:
     """Robots that collide in some limited neighbour, where at least one of a colliding pair is
     not yet coupled (pairs inside the collision set are already planned jointly)."""
     hit: set[int] = set()
-    m = len(options)
-    for i, j in itertools.combinations(range(m), 2):
+    for i, j in itertools.combinations(range(len(options)), 2):
         if i in coupled and j in coupled:
             continue
         if any(not a[2].isdisjoint(b[2]) for a in options[i] for b in options[j]):

@@ -10,6 +10,7 @@ import sys
 from importlib.metadata import version
 
 import click
+import yaml
 
 from bille.instances import BilleError, InstanceError, ScheduleError, check_instance, load_instance
 from bille.instances.bundled import bundled_names, bundled_path, resolve
@@ -99,29 +100,59 @@ def list_() -> int:
 
 @cli.command("solve")
 @click.argument("instance")
-@click.option("--method", "-m", type=click.Choice(sorted(METHODS)), default="bfs", show_default=True)
-@click.option("--time-limit", type=float, default=None, help="Seconds before giving up.")
+@click.option("--method", "-m", type=click.Choice(list(METHODS)), default="temporal-astar", show_default=True)
+@click.option("--epsilon", type=click.FloatRange(min=1.0), help="Heuristic weight (astar, mstar, temporal-astar).")
+@click.option("--horizon", "-H", type=click.IntRange(min=1), help="Steps planned ahead (temporal-astar).")
+@click.option("--time-limit", type=float, help="Seconds before giving up.")
+@click.option("-O", "--option", "extra", multiple=True, metavar="NAME=VALUE",
+              help="Another option of the method, e.g. -O od=false or -O max_steps=200.")
 @click.option("-o", "--output", type=click.Path(dir_okay=False), help="Write the schedule here.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of text.")
-def solve_(instance: str, method: str, time_limit: float | None, output: str | None, as_json: bool) -> int:
+def solve_(instance: str, method: str, epsilon, horizon, time_limit, extra, output, as_json) -> int:
     """Solve INSTANCE with METHOD; print the status and metrics (exit 1 if no schedule)."""
     if time_limit is not None and time_limit <= 0:
         raise click.BadParameter("must be positive", param_hint="--time-limit")
+    options = {k: v for k, v in dict(epsilon=epsilon, horizon=horizon, time_limit=time_limit).items() if v is not None}
+    options.update(_parse_options(extra))
     inst = _instance(instance)
-    result = solve(inst, method, time_limit=time_limit)
+    result = solve(inst, method, **options)
     if output and result.schedule is not None:
         save_schedule(result.schedule, output)
     if as_json:
         _print_json(result.to_json())
-    else:
-        m = result.metrics
-        text = f"{method}: {result.status} in {result.time_s:.3f} s"
-        if m is not None:
-            text += f"; makespan {m.makespan}, tiles traveled {m.tiles_traveled}, waits {m.waits}"
-        click.echo(text)
-        if output and result.schedule is not None:
-            click.echo(f"schedule written to {output}")
+        return EXIT_OK if result.schedule is not None else EXIT_NO
+    m = result.metrics
+    text = f"{method}: {result.status} in {result.time_s:.3f} s"
+    if m is not None:
+        text += f"; makespan {m.makespan}, tiles traveled {m.tiles_traveled}, waits {m.waits}"
+    if result.lower_bound is not None:
+        text += f"; makespan lower bound {result.lower_bound}"
+    click.echo(text)
+    for key in ("unreachable", "failure", "violation"):
+        if key in result.stats:
+            click.echo(f"{key}: {_explain(inst, key, result.stats[key])}")
+    if output and result.schedule is not None:
+        click.echo(f"schedule written to {output}")
     return EXIT_OK if result.schedule is not None else EXIT_NO
+
+
+def _parse_options(items) -> dict:
+    out = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        if not sep or not name:
+            raise click.BadParameter(f"expected NAME=VALUE, got {item!r}", param_hint="-O/--option")
+        try:
+            out[name.replace("-", "_")] = yaml.safe_load(value)
+        except yaml.YAMLError:
+            raise click.BadParameter(f"cannot read the value of {item!r}", param_hint="-O/--option") from None
+    return out
+
+
+def _explain(inst, key: str, value) -> str:
+    if key == "unreachable":
+        return "; ".join(f"robot {i} cannot reach its goal {inst.robot_goals[i]} even alone" for i in value)
+    return str(value)
 
 
 @cli.group()

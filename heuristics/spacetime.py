@@ -1,0 +1,72 @@
+"""Single-robot A* over (pose, time) with a reservation table (paper, Methods, "Temporal A*").
+
+Time is part of the vertex, so waiting is a move like any other. The search plans one robot's
+next ``H`` steps on the current structure, avoiding the cells that other robots have reserved
+at each step (their collision cells) and, on the first step only, cells that are blocked (the
+current feet of lower-priority robots). A step costs 1 unless the robot is at its goal before
+and after it; ``f = g + epsilon * h`` with ``h`` the breadth-first distance to the goal.
+"""
+from __future__ import annotations
+
+import heapq
+import itertools
+
+import numpy as np
+
+from .walking import Walk
+
+
+def window(walk: Walk, dist: np.ndarray | None, goal_cell: int, pose: int, H: int,
+           reserved: list[set[int]], blocked_first: set[int], epsilon: float = 1.0,
+           stats: dict | None = None) -> list[tuple[int, int]] | None:
+    """The best ``H``-step walk from ``pose``: ``[(action, pose after)] * H``, or None if no walk
+    avoids the reservations (``reserved[t]``: cells taken at step ``t``, ``t = 1 .. H``; index 0
+    unused) and, at step 1, ``blocked_first``.
+
+    With ``dist`` None (no goal) every step is free and the robot only keeps out of the way.
+    """
+    feet = walk.graph.feet
+
+    def at_goal(p: int) -> bool:
+        return goal_cell < 0 or int(feet[p, 0]) == goal_cell
+
+    def h(p: int) -> float:
+        return 0.0 if dist is None else epsilon * float(dist[p])
+
+    counter = itertools.count()
+    g = {(pose, 0): 0}
+    parent: dict = {(pose, 0): None}
+    frontier = [(h(pose), 0, next(counter), pose, 0)]
+    expanded = 0
+    while frontier:
+        _, _, _, p, t = heapq.heappop(frontier)
+        if t == H:
+            if stats is not None:
+                stats["expanded"] = stats.get("expanded", 0) + expanded
+            return _unwind(parent, (p, t))
+        expanded += 1
+        gp = g[(p, t)]
+        taken = reserved[t + 1]
+        here = at_goal(p)
+        for a, q, cells in walk.moves(p):
+            if not taken.isdisjoint(cells) or (t == 0 and not blocked_first.isdisjoint(cells)):
+                continue
+            node = (q, t + 1)
+            cost = gp + (0 if here and at_goal(q) else 1)
+            if cost < g.get(node, 1 << 60):
+                g[node] = cost
+                parent[node] = ((p, t), a)
+                # deeper nodes first on ties: reach the end of the window sooner
+                heapq.heappush(frontier, (cost + h(q), -(t + 1), next(counter), q, t + 1))
+    if stats is not None:
+        stats["expanded"] = stats.get("expanded", 0) + expanded
+    return None
+
+
+def _unwind(parent: dict, node) -> list[tuple[int, int]]:
+    path = []
+    while parent[node] is not None:
+        prev, a = parent[node]
+        path.append((a, node[0]))
+        node = prev
+    return path[::-1]

@@ -1,0 +1,154 @@
+"""Temporal A*: prioritized planning in a receding time window (paper, Methods, "Temporal A*").
+
+Symbols of the paper: ``H`` the time horizon (steps planned ahead), ``Q`` the priority queue
+(robot ids, highest priority first), ``epsilon`` the heuristic weight.
+
+Every step, the robots plan their next ``H`` moves one after another in the order of ``Q``
+(:func:`~.spacetime.window`). A robot avoids the cells that higher-priority robots have planned
+for each of the ``H`` steps; it sees lower-priority robots only at the first step (their current
+feet), assuming that later they move out of the way. All robots then make the first move of
+their plan, and the window recedes by one step.
+
+Deadlocks. If a robot finds no walk at all (not even waiting), it moves up one place in ``Q`` and
+the step is planned again. If the robots come back to a joint state they were in before with
+the same ``Q``, they are going round in circles: the lowest-priority robot not at its goal moves
+up one place. Both count against a budget of priority shifts; when it is spent, or the step
+bound or time limit is reached, the planner stops with status ``timeout`` and the reason in
+``stats["failure"]``. Temporal A* is not complete: a stop is not a proof that no schedule exists.
+"""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from bille.instances import Instance, OptionError
+from bille.instances.rules import State, apply
+
+from .joint import JointProblem, makespan_bound, to_result
+from .spacetime import window
+
+
+def plan(instance: Instance, *, epsilon: float = 1.0, horizon: int = 5, time_limit: float | None = None,
+         max_steps: int | None = None, max_shifts: int | None = None, shift_priorities: bool = True,
+         priorities: list[int] | None = None):
+    """Temporal A* on a fixed structure.
+
+    Parameters
+    ----------
+    epsilon : heuristic weight (>= 1) of each robot's window search.
+    horizon : ``H``, the number of steps each robot plans ahead (>= 1).
+    time_limit : seconds before stopping with status ``timeout``.
+    max_steps : step bound (default: 4 x the robots' summed distances to their goals, at least 100).
+    max_shifts : budget of priority shifts (default: 4 m^2 for m robots).
+    shift_priorities : False keeps ``Q`` fixed (for comparison): a blocked robot then ends the run.
+    priorities : the initial ``Q`` (default: robot ids in order).
+    """
+    m = instance.num_robots
+    if epsilon < 1:
+        raise OptionError(f"temporal-astar: epsilon must be >= 1, got {epsilon}")
+    if horizon < 1:
+        raise OptionError(f"temporal-astar: the horizon H must be >= 1, got {horizon}")
+    Q = list(range(m)) if priorities is None else list(priorities)
+    if sorted(Q) != list(range(m)):
+        raise OptionError(f"temporal-astar: priorities must order the robot ids 0..{m - 1}, got {priorities}")
+    start_time = time.perf_counter()
+    deadline = None if time_limit is None else start_time + time_limit
+    problem = JointProblem.of(instance)
+    bound = makespan_bound(problem)
+    stats = {"horizon": horizon, "epsilon": epsilon, "steps": 0, "priority_shifts": 0, "replans": 0,
+             "expanded": 0, "plan_ms_mean": 0.0, "plan_ms_max": 0.0}
+    if problem.unreachable():
+        stats["unreachable"] = problem.unreachable()
+        return to_result(instance, "temporal-astar", "infeasible", None, lower_bound=None, stats=stats)
+    total = sum(int(d[p]) for d, p in zip(problem.dists, problem.start))
+    max_steps = max(100, 4 * total) if max_steps is None else max_steps
+    max_shifts = 4 * m * m if max_shifts is None else max_shifts
+    dists = [d if c >= 0 else None for d, c in zip(problem.dists, problem.goals)]
+    feet = [w.graph.feet for w in problem.walks]
+
+    state = instance.start_state
+    steps: list[tuple[int, ...]] = []
+    seen: set = set()
+    step_times: list[float] = []
+
+    def stop(reason: str):
+        stats["failure"] = reason
+        _timing(stats, step_times)
+        return to_result(instance, "temporal-astar", "timeout", None, lower_bound=bound, stats=stats)
+
+    while not problem.is_goal(state.poses):
+        if len(steps) >= max_steps:
+            return stop("step bound")
+        if deadline is not None and time.perf_counter() > deadline:
+            return stop("time limit")
+        if (state.poses, tuple(Q)) in seen:  # going round in circles
+            if not shift_priorities or stats["priority_shifts"] >= max_shifts:
+                return stop("deadlock")
+            stuck = [i for i in Q if not problem.at_goal(i, state.poses[i])]
+            _shift_up(Q, stuck[-1])
+            stats["priority_shifts"] += 1
+            continue
+        seen.add((state.poses, tuple(Q)))
+
+        t0 = time.perf_counter()
+        while True:  # plan the step; a blocked robot moves up in Q and the step is planned again
+            first, blocked = _plan_step(problem, state.poses, Q, horizon, epsilon, dists, feet, stats)
+            if blocked is None:
+                break
+            if not shift_priorities or stats["priority_shifts"] >= max_shifts:
+                step_times.append(time.perf_counter() - t0)
+                return stop("deadlock")
+            _shift_up(Q, blocked)
+            stats["priority_shifts"] += 1
+            stats["replans"] += 1
+        step_times.append(time.perf_counter() - t0)
+
+        nxt = apply(instance.world, state, first, step=len(steps) + 1)
+        if not isinstance(nxt, State):  # cannot happen if the windows respect the reservations
+            stats["failure"] = f"internal: {nxt}"
+            return to_result(instance, "temporal-astar", "error", None, lower_bound=bound, stats=stats)
+        steps.append(tuple(first))
+        state = nxt
+        stats["steps"] = len(steps)
+    _timing(stats, step_times)
+    stats["final_priorities"] = list(Q)
+    return to_result(instance, "temporal-astar", "feasible", steps, lower_bound=bound, stats=stats)
+
+
+def _plan_step(problem: JointProblem, poses, Q: list[int], H: int, epsilon: float, dists, feet, stats):
+    """Plan every robot's window in the order of ``Q``. Returns ``(first actions, None)`` or
+    ``(None, robot)`` for the first robot that finds no walk."""
+    reserved: list[set[int]] = [set() for _ in range(H + 1)]
+    first = [0] * len(poses)
+    for rank, i in enumerate(Q):
+        lower = Q[rank + 1:]
+        blocked = {int(c) for j in lower for c in feet[j][poses[j]]}
+        path = window(problem.walks[i], dists[i], problem.goals[i], poses[i], H, reserved, blocked, epsilon, stats)
+        if path is None:
+            return None, i
+        p = poses[i]
+        for t, (a, q) in enumerate(path, start=1):
+            reserved[t].update(_cells(problem, i, p, a))
+            p = q
+        first[i] = path[0][0]
+    return first, None
+
+
+def _cells(problem: JointProblem, i: int, pose: int, action: int) -> frozenset:
+    for a, _, cells in problem.walks[i].moves(pose):
+        if a == action:
+            return cells
+    raise KeyError(action)
+
+
+def _shift_up(Q: list[int], robot: int) -> None:
+    k = Q.index(robot)
+    if k > 0:
+        Q[k - 1], Q[k] = Q[k], Q[k - 1]
+
+
+def _timing(stats: dict, step_times: list[float]) -> None:
+    if step_times:
+        stats["plan_ms_mean"] = round(1000 * float(np.mean(step_times)), 3)
+        stats["plan_ms_max"] = round(1000 * float(np.max(step_times)), 3)
