@@ -32,9 +32,10 @@ class JointProblem:
     dists: list[np.ndarray]  # per robot: steps from each pose to its goal (0 everywhere if none)
 
     def __post_init__(self) -> None:
-        # Python lists for the inner loops: indexing numpy per call costs more than the search
-        self._dist = [d.tolist() for d in self.dists]
-        self._home = [[True] * w.succ.shape[0] if c < 0 else (w.graph.feet[:, 0] == c).tolist()
+        # plain lists for the inner loops (indexing numpy per call costs more than the search):
+        # dist_lists[i][p] = dists[i][p]; home_lists[i][p]: pose p has robot i's front on its goal
+        self.dist_lists = [d.tolist() for d in self.dists]
+        self.home_lists = [[True] * w.succ.shape[0] if c < 0 else (w.graph.feet[:, 0] == c).tolist()
                       for w, c in zip(self.walks, self.goals)]
 
     @classmethod
@@ -55,21 +56,21 @@ class JointProblem:
         return [i for i, (d, p) in enumerate(zip(self.dists, self.start)) if d[p] >= UNREACHABLE]
 
     def at_goal(self, i: int, pose: int) -> bool:
-        return self._home[i][pose]
+        return self.home_lists[i][pose]
 
     def is_goal(self, poses: Poses) -> bool:
-        return all(home[p] for home, p in zip(self._home, poses))
+        return all(home[p] for home, p in zip(self.home_lists, poses))
 
     def h(self, poses: Poses) -> tuple[int, int]:
         """Admissible, consistent estimate: (sum, max) of the robots' distances to their goals."""
-        ds = [d[p] for d, p in zip(self._dist, poses)]
+        ds = [d[p] for d, p in zip(self.dist_lists, poses)]
         return sum(ds), max(ds, default=0)
 
     def step_cost(self, i: int, p: int, q: int, debt: int) -> tuple[int, int]:
         """(cost, new debt) of robot ``i`` moving from pose ``p`` to ``q`` in one step."""
         if self.goals[i] < 0:
             return 0, 0
-        home = self._home[i]
+        home = self.home_lists[i]
         if home[p]:
             return (0, debt + 1) if home[q] else (1 + debt, 0)
         return 1, 0
@@ -109,7 +110,7 @@ class JointProblem:
     def transition(self, poses: Poses, debts: Debts, nxt: Poses) -> tuple[int, Debts]:
         """Sum-of-costs increment and new debts of a joint step."""
         total, new = 0, []
-        for home, p, q, d in zip(self._home, poses, nxt, debts):
+        for home, p, q, d in zip(self.home_lists, poses, nxt, debts):
             if home[p]:  # robots without a goal are always home and never pay
                 if home[q]:
                     new.append(d + 1)

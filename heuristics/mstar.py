@@ -191,7 +191,7 @@ class _MStar:
         """Heuristic of a partial step: moved robots from their new pose; a robot still to be
         assigned has this step ahead of it, so it counts its distance for the sum of costs and
         one less for the makespan (both admissible and consistent along the chain)."""
-        dist = self.problem._dist
+        dist = self.problem.dist_lists
         moved = {r: q for r, (_, q, _) in zip(order, assigned)}
         moved.update((i, m[1]) for i, m in uncoupled.items())
         soc, span = 0, 0

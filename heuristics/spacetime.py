@@ -11,27 +11,32 @@ from __future__ import annotations
 import heapq
 import itertools
 
-import numpy as np
-
 from .walking import Walk
 
 
-def window(walk: Walk, dist: np.ndarray | None, goal_cell: int, pose: int, H: int,
+def window(walk: Walk, dist: list[int] | None, home: list[bool] | None, pose: int, H: int,
            reserved: list[set[int]], blocked_first: set[int], epsilon: float = 1.0,
            stats: dict | None = None) -> list[tuple[int, int]] | None:
     """The best ``H``-step walk from ``pose``: ``[(action, pose after)] * H``, or None if no walk
     avoids the reservations (``reserved[t]``: cells taken at step ``t``, ``t = 1 .. H``; index 0
     unused) and, at step 1, ``blocked_first``.
 
-    With ``dist`` None (no goal) every step is free and the robot only keeps out of the way.
+    ``dist[p]`` is the distance from pose ``p`` to the goal and ``home[p]`` whether ``p`` has
+    the front foot on it (plain lists: this is the inner loop of Temporal A*). With ``dist``
+    None (no goal) every step is free and the robot only keeps out of the way.
     """
-    feet = walk.graph.feet
+    if dist is None:
+        def at_goal(p: int) -> bool:
+            return True
 
-    def at_goal(p: int) -> bool:
-        return goal_cell < 0 or int(feet[p, 0]) == goal_cell
+        def h(p: int) -> float:
+            return 0.0
+    else:
+        def at_goal(p: int) -> bool:
+            return home[p]
 
-    def h(p: int) -> float:
-        return 0.0 if dist is None else epsilon * float(dist[p])
+        def h(p: int) -> float:
+            return epsilon * dist[p]
 
     counter = itertools.count()
     g = {(pose, 0): 0}

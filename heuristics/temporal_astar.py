@@ -64,8 +64,8 @@ def plan(instance: Instance, *, epsilon: float = 1.0, horizon: int = 5, time_lim
     total = sum(int(d[p]) for d, p in zip(problem.dists, problem.start))
     max_steps = max(100, 4 * total) if max_steps is None else max_steps
     max_shifts = 4 * m * m if max_shifts is None else max_shifts
-    dists = [d if c >= 0 else None for d, c in zip(problem.dists, problem.goals)]
-    feet = [w.graph.feet for w in problem.walks]
+    dists = [d if c >= 0 else None for d, c in zip(problem.dist_lists, problem.goals)]
+    feet = [w.graph.feet.tolist() for w in problem.walks]
 
     state = instance.start_state
     steps: list[tuple[int, ...]] = []
@@ -119,12 +119,16 @@ def plan(instance: Instance, *, epsilon: float = 1.0, horizon: int = 5, time_lim
 def _plan_step(problem: JointProblem, poses, Q: list[int], H: int, epsilon: float, dists, feet, stats):
     """Plan every robot's window in the order of ``Q``. Returns ``(first actions, None)`` or
     ``(None, robot)`` for the first robot that finds no walk."""
+    # the feet of the robots below each rank of Q (seen by that robot at the first step only)
+    below: list[set[int]] = [set() for _ in range(len(Q) + 1)]
+    for rank in range(len(Q) - 1, -1, -1):
+        j = Q[rank]
+        below[rank] = below[rank + 1] | set(feet[j][poses[j]])
     reserved: list[set[int]] = [set() for _ in range(H + 1)]
     first = [0] * len(poses)
     for rank, i in enumerate(Q):
-        lower = Q[rank + 1:]
-        blocked = {int(c) for j in lower for c in feet[j][poses[j]]}
-        path = window(problem.walks[i], dists[i], problem.goals[i], poses[i], H, reserved, blocked, epsilon, stats)
+        path = window(problem.walks[i], dists[i], problem.home_lists[i], poses[i], H, reserved, below[rank + 1],
+                      epsilon, stats)
         if path is None:
             return None, i
         p = poses[i]

@@ -175,6 +175,55 @@ def bench_core(size: int, robots: int, steps: int, compile_size: int, seed: int)
     return EXIT_OK
 
 
+@bench.command("planners")
+@click.option("--time-limit", type=click.FloatRange(min=0.1), default=60.0, show_default=True, help="Seconds per run.")
+@click.option("--jobs", "-j", type=click.IntRange(min=1), default=None, help="Parallel processes (default: CPUs).")
+@click.option("--maps", default=",".join(f"compare-{m}" for m in range(2, 7)), show_default=True,
+              help="Comma-separated bundled maps.")
+@click.option("--movesets", default="S5,S7", show_default=True)
+@click.option("--out", type=click.Path(file_okay=False), default="bench-out", show_default=True,
+              help="Folder for planners.csv and planners.png.")
+def bench_planners(time_limit: float, jobs: int | None, maps: str, movesets: str, out: str) -> int:
+    """The paper's planner comparison: A*, M*, Temporal A* on the comparison maps."""
+    from pathlib import Path
+
+    from .bench_planners import default_jobs, plot, run_grid, tables, write_csv
+
+    names = [m.strip() for m in maps.split(",") if m.strip()]
+    for name in names:
+        bundled_path(name)  # unknown names fail here, before any work
+    sets = [m.strip() for m in movesets.split(",") if m.strip()]
+    for ms in sets:
+        if ms not in ("S5", "S7", "point"):
+            raise click.BadParameter(f"unknown moveset {ms!r}", param_hint="--movesets")
+    folder = Path(out)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise BilleError(f"{folder}: cannot create the output folder ({exc.strerror})") from None
+    rows = run_grid(time_limit, jobs or default_jobs(), names, sets)
+    for line in tables(rows, time_limit):
+        click.echo(line)
+    write_csv(rows, folder / "planners.csv")
+    plot(rows, time_limit, folder / "planners.png")
+    click.echo(f"wrote {folder / 'planners.csv'} and {folder / 'planners.png'}")
+    return EXIT_OK
+
+
+@bench.command("crowd")
+@click.option("--size", type=click.IntRange(8, 512), default=64, show_default=True)
+@click.option("--robots", type=click.IntRange(1, 1000), default=50, show_default=True)
+@click.option("--horizon", "-H", type=click.IntRange(min=1), default=5, show_default=True)
+@click.option("--seed", type=int, default=0, show_default=True)
+def bench_crowd(size: int, robots: int, horizon: int, seed: int) -> int:
+    """Temporal A* with many robots: mean replanning time per step."""
+    from .bench_planners import bench_crowd as run
+
+    for line in run(size, robots, horizon, seed):
+        click.echo(line)
+    return EXIT_OK
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``bille`` console script."""
     try:

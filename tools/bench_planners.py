@@ -1,0 +1,229 @@
+"""The paper's planner comparison (Results, "Planner comparison": Fig. CompMaps and Table I).
+
+Five crowded maps with 2 to 6 robots (bundled ``compare-2`` ... ``compare-6``), movesets S5 and
+S7, joint A* and M* with epsilon in {1, 2, 3}, Temporal A* with epsilon in {1, 2, 3} and H in
+{2, 5, 8}: every run gets the same time limit, runs in its own process, and its schedule is
+validated. Results go to a CSV file, tables like Table I (time steps, tiles traveled, planning
+time, N/A when unsolved) and a log-scale plot of planning time like the figure.
+
+Also: Temporal A* with many robots on a large structure (mean replanning time per step).
+"""
+from __future__ import annotations
+
+import csv
+import dataclasses
+import os
+import random
+import time
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from pathlib import Path
+
+import numpy as np
+
+MAPS = [f"compare-{m}" for m in range(2, 7)]
+MOVESETS = ("S5", "S7")
+EPSILONS = (1, 2, 3)
+HORIZONS = (2, 5, 8)
+FIELDS = ["map", "robots", "moveset", "method", "epsilon", "horizon", "status", "solved", "makespan",
+          "tiles_traveled", "sum_of_costs", "time_s"]
+
+
+def configurations(maps=MAPS, movesets=MOVESETS) -> list[dict]:
+    runs = []
+    for name in maps:
+        for ms in movesets:
+            for eps in EPSILONS:
+                runs.append(dict(map=name, moveset=ms, method="astar", epsilon=eps, horizon=None))
+                runs.append(dict(map=name, moveset=ms, method="mstar", epsilon=eps, horizon=None))
+                for H in HORIZONS:
+                    runs.append(dict(map=name, moveset=ms, method="temporal-astar", epsilon=eps, horizon=H))
+    return runs
+
+
+def run_one(config: dict, time_limit: float) -> dict:
+    """One experiment, in a worker process."""
+    from bille.instances import check_instance, load_instance, load_moveset
+    from bille.instances.bundled import bundled_path
+    from bille.solvers import solve
+
+    inst = load_instance(bundled_path(config["map"]))
+    inst = check_instance(dataclasses.replace(inst, moveset=load_moveset(config["moveset"])))
+    options = {"epsilon": float(config["epsilon"]), "time_limit": time_limit}
+    if config["horizon"] is not None:
+        options["horizon"] = config["horizon"]
+    result = solve(inst, config["method"], **options)
+    m = result.metrics
+    return dict(config, robots=inst.num_robots, status=result.status, solved=m is not None,
+                makespan=m.makespan if m else None, tiles_traveled=m.tiles_traveled if m else None,
+                sum_of_costs=result.stats.get("sum_of_costs"), time_s=round(result.time_s, 4))
+
+
+def run_grid(time_limit: float, jobs: int, maps=MAPS, movesets=MOVESETS, progress=True) -> list[dict]:
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+    runs = configurations(maps, movesets)
+    rows = []
+    columns = [TextColumn("planners"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(), TextColumn("{task.description}")]
+    with Progress(*columns, disable=not progress, transient=False) as bar, ProcessPoolExecutor(max_workers=jobs) as pool:
+        task = bar.add_task("", total=len(runs))
+        futures = {pool.submit(run_one, c, time_limit): c for c in runs}
+        for fut in as_completed(futures):
+            row = fut.result()
+            rows.append(row)
+            bar.update(task, advance=1, description=f"{row['map']} {row['moveset']} {label(row)}: {row['status']}")
+    key = {c["map"] + c["moveset"] + label(c): i for i, c in enumerate(runs)}
+    return sorted(rows, key=lambda r: key[r["map"] + r["moveset"] + label(r)])
+
+
+def label(row: dict) -> str:
+    name = {"astar": "A*", "mstar": "M*", "temporal-astar": "Temp A*"}[row["method"]]
+    eps = f"eps={row['epsilon']}"
+    return f"{name}({eps})" if row["horizon"] is None else f"{name}({eps},H={row['horizon']})"
+
+
+def write_csv(rows: list[dict], path: Path) -> None:
+    with open(path, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=FIELDS, extrasaction="ignore")
+        w.writeheader()
+        w.writerows(rows)
+
+
+def tables(rows: list[dict], time_limit: float) -> list[str]:
+    """Per moveset, like Table I: time steps, tiles traveled and planning time per configuration
+    and number of robots (N/A when unsolved), then planning time as a ratio to M*(eps=1) on the
+    same map, the baseline of the same run."""
+    out = []
+    robots = sorted({r["robots"] for r in rows})
+    head = "".join(f"{'m=' + str(m):>9}" for m in robots)
+    metrics = [("time steps", "makespan", str), ("tiles traveled", "tiles_traveled", str),
+               ("planning time [s]", "time_s", lambda t: f"{t:.3f}")]
+    for ms in sorted({r["moveset"] for r in rows}):
+        sub = [r for r in rows if r["moveset"] == ms]
+        labels = list(dict.fromkeys(label(r) for r in sub))
+        cell = {(label(r), r["robots"]): r for r in sub}
+        for title, field, fmt in metrics:
+            out.append(f"{title} ({ms}, time limit {time_limit:g} s)")
+            out.append(f"  {'':24}{head}")
+            for lbl in labels:
+                vals = [cell.get((lbl, m)) for m in robots]
+                out.append(f"  {lbl:24}" + "".join(f"{fmt(r[field]) if r and r['solved'] else 'N/A':>9}" for r in vals))
+            out.append("")
+        out.append(f"planning time / M*(eps=1) on the same map ({ms}; below 1 is faster)")
+        out.append(f"  {'':24}{head}")
+        for lbl in labels:
+            ratios = []
+            for m in robots:
+                r, b = cell.get((lbl, m)), cell.get(("M*(eps=1)", m))
+                ok = r and r["solved"] and b and b["solved"] and b["time_s"] > 0
+                ratios.append(f"{r['time_s'] / b['time_s']:.3g}" if ok else "-")
+            out.append(f"  {lbl:24}" + "".join(f"{x:>9}" for x in ratios))
+        out.append("")
+    return out
+
+
+def plot(rows: list[dict], time_limit: float, path: Path) -> None:
+    """Planning time per map (log scale), one panel per moveset; unsolved runs as X on the
+    time-limit line (dashed), as in the paper's figure."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    movesets = sorted({r["moveset"] for r in rows})
+    labels = list(dict.fromkeys(label(r) for r in rows))
+    family = {"astar": ("Blues", "s"), "mstar": ("Greens", "^"), "temporal-astar": ("Reds", "o")}
+    style = {}
+    for method, (cmap, marker) in family.items():
+        mine = [lbl for lbl in labels if any(label(r) == lbl and r["method"] == method for r in rows)]
+        for k, lbl in enumerate(mine):
+            style[lbl] = (plt.get_cmap(cmap)(0.45 + 0.5 * k / max(1, len(mine) - 1)), marker)
+    fig, axes = plt.subplots(len(movesets), 1, figsize=(11, 3.4 * len(movesets)), squeeze=False)
+    for ax, ms in zip(axes[:, 0], movesets):
+        for k, lbl in enumerate(labels):
+            color, marker = style[lbl]
+            offset = (k - len(labels) / 2) * 0.035
+            for r in (r for r in rows if r["moveset"] == ms and label(r) == lbl):
+                x = r["robots"] + offset
+                if r["solved"]:
+                    ax.plot(x, max(r["time_s"], 1e-4), marker, color=color, markersize=5)
+                else:
+                    ax.plot(x, time_limit, "x", color=color, markersize=6, markeredgewidth=1.5)
+        ax.axhline(time_limit, linestyle="--", color="gray", linewidth=1)
+        ax.set_yscale("log")
+        ax.set_ylabel("planning time [s]")
+        ax.set_title(f"moveset {ms}  (x: not solved within {time_limit:g} s)", fontsize=10)
+        ax.set_xticks(sorted({r["robots"] for r in rows}))
+        ax.set_xlabel("robots (map compare-m)")
+    handles = [plt.Line2D([], [], linestyle="", marker=style[lbl][1], color=style[lbl][0], label=lbl) for lbl in labels]
+    fig.legend(handles=handles, loc="center right", fontsize=7, frameon=False)
+    fig.tight_layout(rect=(0, 0, 0.8, 1))
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
+
+
+# ---- many robots -----------------------------------------------------------------------------
+
+
+def crowd_instance(size: int, robots: int, seed: int):
+    """A ``size`` square of tiles with ~8% holes, ``robots`` S7 robots and random goal cells."""
+    from bille.instances import Grid, Instance, Robot, check_instance, load_moveset
+    from bille.instances.grid import is_connected
+    from bille.heuristics.walking import UNREACHABLE, walk_for
+
+    rnd = random.Random(seed)
+    n = size * size
+    tiles = np.ones(n, dtype=bool)
+    for c in rnd.sample(range(n), n // 12):
+        tiles[c] = False
+        if not is_connected(tiles, size, size):
+            tiles[c] = True
+    grid = Grid.from_masks(size, size, np.zeros(n, bool), tiles)
+    ms = load_moveset("S7")
+    placed, used = [], set()
+    while len(placed) < robots:
+        x, y = rnd.randrange(size), rnd.randrange(size - 1)
+        f, b = (x, y), (x, y + 1)
+        if tiles[grid.cell(*f)] and tiles[grid.cell(*b)] and not {f, b} & used:
+            placed.append(Robot(f, b))
+            used |= {f, b}
+    probe = Instance("crowd", ms, grid, tuple(placed))
+    walk = walk_for(probe.world.graphs[0], tiles)
+    goals, taken = [], set()
+    for r, pose in zip(placed, probe.start_state.poses):
+        while True:
+            cell = rnd.choice(np.flatnonzero(tiles).tolist())
+            if cell not in taken and walk.distances(cell)[pose] < UNREACHABLE:
+                goals.append(grid.xy(cell))
+                taken.add(cell)
+                break
+    return check_instance(Instance(f"crowd-{size}-{robots}", ms, grid, tuple(placed), robot_goals=tuple(goals)))
+
+
+def bench_crowd(size: int = 64, robots: int = 50, horizon: int = 5, seed: int = 0) -> list[str]:
+    from bille.heuristics import spacetime
+    from bille.heuristics.joint import JointProblem
+    from bille.solvers import solve, validate
+
+    inst = crowd_instance(size, robots, seed)
+    result = solve(inst, "temporal-astar", horizon=horizon)
+    ok = result.schedule is not None and validate(inst, result.schedule).valid
+    # baseline: every robot's window planned alone (no reservations), once, from the start
+    problem = JointProblem.of(inst)
+    t0 = time.perf_counter()
+    for i, p in enumerate(problem.start):
+        spacetime.window(problem.walks[i], problem.dist_lists[i], problem.home_lists[i], p, horizon,
+                         [set() for _ in range(horizon + 1)], set())
+    alone_ms = 1000 * (time.perf_counter() - t0)
+    mean = result.stats["plan_ms_mean"]
+    return [
+        f"Temporal A* with {robots} robots on a {size}x{size} structure (S7, H={horizon}, seed {seed}):",
+        f"  status {result.status}{'' if ok else ' (no valid schedule)'}, {result.stats['steps']} steps, "
+        f"{result.stats['priority_shifts']} priority shifts, total {result.time_s:.2f} s",
+        f"  replanning per step: mean {mean:.1f} ms, max {result.stats['plan_ms_max']:.1f} ms   [target mean < 100 ms]",
+        f"  baseline, every robot's window alone without reservations: {alone_ms:.1f} ms "
+        f"-> coordination costs {mean / alone_ms:.2f}x",
+    ]
+
+
+def default_jobs() -> int:
+    return max(1, os.cpu_count() or 1)
