@@ -23,15 +23,22 @@ from bille.solvers import Schedule, bind, dump_schedule, schedule_from_text, val
 from bille.solvers.bfs import candidate_actions
 
 
-def random_instance(size: int, robots: int, seed: int) -> Instance:
-    """An all-tile square with ~8% holes (kept connected) and robots on random free spots."""
-    rnd = random.Random(seed)
+def holey_square(size: int, rnd: random.Random) -> np.ndarray:
+    """Flat tile mask of a ``size`` square with about 8% holes, kept 4-connected."""
     n = size * size
     tiles = np.ones(n, dtype=bool)
     for c in rnd.sample(range(n), n // 12):
         tiles[c] = False
         if not is_connected(tiles, size, size):
             tiles[c] = True
+    return tiles
+
+
+def random_instance(size: int, robots: int, seed: int) -> Instance:
+    """An all-tile square with ~8% holes (kept connected) and robots on random free spots."""
+    rnd = random.Random(seed)
+    n = size * size
+    tiles = holey_square(size, rnd)
     grid = Grid.from_masks(size, size, np.zeros(n, bool), tiles)
     placed, used = [], set()
     while len(placed) < robots:

@@ -166,17 +166,14 @@ def plot(rows: list[dict], time_limit: float, path: Path) -> None:
 
 def crowd_instance(size: int, robots: int, seed: int):
     """A ``size`` square of tiles with ~8% holes, ``robots`` S7 robots and random goal cells."""
-    from bille.instances import Grid, Instance, Robot, check_instance, load_moveset
-    from bille.instances.grid import is_connected
     from bille.heuristics.walking import UNREACHABLE, walk_for
+    from bille.instances import Grid, Instance, Robot, check_instance, load_moveset
+
+    from .bench_core import holey_square
 
     rnd = random.Random(seed)
     n = size * size
-    tiles = np.ones(n, dtype=bool)
-    for c in rnd.sample(range(n), n // 12):
-        tiles[c] = False
-        if not is_connected(tiles, size, size):
-            tiles[c] = True
+    tiles = holey_square(size, rnd)
     grid = Grid.from_masks(size, size, np.zeros(n, bool), tiles)
     ms = load_moveset("S7")
     placed, used = [], set()
