@@ -15,6 +15,8 @@ _ENTRIES = {
     "astar": "bille.heuristics.astar:plan",
     "mstar": "bille.heuristics.mstar:plan",
     "temporal-astar": "bille.heuristics.temporal_astar:plan",
+    "cpsat": "bille.solvers.exact:plan_cpsat",
+    "sat": "bille.solvers.exact:plan_sat",
     "bfs": "bille.solvers.bfs:plan",
 }
 

@@ -1,0 +1,424 @@
+"""The time-expanded model of an instance over horizon ``T`` (DESIGN §3), as clauses.
+
+One variable layout serves both back ends (:mod:`.cpsat`, :mod:`.cnf`): Boolean variables with
+integer ids, clauses, and exactly-one / at-most-one groups.
+
+Variables (``t`` counts time points 0..T; step ``t`` leads from ``t-1`` to ``t``):
+
+- ``y[i, t, p, a]``: robot ``i`` is at pose ``p`` at ``t-1`` and takes action ``a`` at step ``t``;
+- ``x[i, t, p]``: robot ``i`` is at pose ``p`` at ``t``;
+- ``carry[i, t]``: robot ``i`` carries a tile at ``t``;
+- ``tile[t, c]``: cell ``c`` holds a tile at ``t``;
+- ``occ[i, t, c]``: robot ``i``'s collision set of step ``t`` contains ``c`` (only where two robots
+  could need ``c``);
+- ``done[k]``: (assumption) every robot waits after step ``k``: the makespan is at most ``k``;
+- ``root``, ``none_before``, ``reach``: the eager connectivity encoding.
+
+Constraints: one action per robot per step (exactly-one over ``y``); poses follow the actions;
+pick needs a tile and no load, place a load and an empty cell; carrying and tiles change only by
+picks and places; new feet on tiles; per cell and step at most one robot's collision set
+(carried-tile cells only while carrying); the goal at ``T``; and the tiles 4-connected at every
+step, either eagerly (``reach``: layered reachability from the first tile, i.e. unary distance
+labels) or lazily (:func:`connectivity_cuts`, added when a solution breaks it).
+
+Pruning (each can be switched off to measure it): *reach* keeps a pose at ``t`` only if the
+robot can walk there from its start in ``t`` steps and on to its goal cell in ``T - t`` steps
+(distances in the relaxed pose graph, obstacles only, because tiles may appear); *cells* keeps
+tile variables only for cells that can ever hold a tile (start or goal tiles, or the target of
+some place action a robot could reach). Tiles have no identity: a cell holds a tile or not, so
+symmetric assignments of tiles to cells never arise.
+"""
+from __future__ import annotations
+
+import time
+from collections import defaultdict
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from bille.instances import Instance
+from bille.instances.grid import HEADING_VECTORS, components
+from bille.instances.moveset import Kind
+from bille.solvers.bounds import INF, Relaxed
+
+CONNECTIVITY = ("eager", "lazy")
+
+
+class OutOfTime(Exception):
+    """Building the model passed its deadline."""
+
+
+@dataclass(frozen=True)
+class Options:
+    """How to build the model: pruning switches and the connectivity encoding."""
+
+    prune_reach: bool = True
+    prune_cells: bool = True
+    connectivity: str = "eager"
+
+
+@dataclass
+class Model:
+    """Clauses and cardinality groups over variables ``1 .. num_vars`` (DIMACS numbering)."""
+
+    T: int
+    names: list = field(default_factory=lambda: [None])
+    clauses: list[list[int]] = field(default_factory=list)
+    exactly_one: list[list[int]] = field(default_factory=list)
+    at_most_one: list[list[int]] = field(default_factory=list)
+    y: dict = field(default_factory=dict)  # (i, t) -> list of (var, pose, action)
+    tile: dict = field(default_factory=dict)  # (t, cell) -> literal
+    done: dict = field(default_factory=dict)  # k -> var
+    motion: list[int] = field(default_factory=list)  # y variables of motion actions
+    true: int = 0
+
+    @property
+    def num_vars(self) -> int:
+        return len(self.names) - 1
+
+    def var(self, name) -> int:
+        self.names.append(name)
+        return len(self.names) - 1
+
+    def size(self) -> dict:
+        return {"variables": self.num_vars, "clauses": len(self.clauses),
+                "exactly_one": len(self.exactly_one), "at_most_one": len(self.at_most_one)}
+
+    def dump(self, path) -> None:
+        """Write the model as DIMACS CNF (cardinality groups as pairwise clauses), with a
+        comment naming each variable, for inspection."""
+        groups = [g for g in self.exactly_one if g] + [g for g in self.at_most_one if g]
+        extra = [g for g in self.exactly_one]
+        pairs = sum(len(g) * (len(g) - 1) // 2 for g in groups)
+        with open(path, "w") as f:
+            f.write(f"p cnf {self.num_vars} {len(self.clauses) + len(extra) + pairs}\n")
+            for v in range(1, self.num_vars + 1):
+                f.write(f"c {v} {self.names[v]}\n")
+            for c in self.clauses + extra:
+                f.write(" ".join(map(str, c)) + " 0\n")
+            for g in groups:
+                for a in range(len(g)):
+                    for b in range(a + 1, len(g)):
+                        f.write(f"{-g[a]} {-g[b]} 0\n")
+
+
+def build(instance: Instance, T: int, options: Options = Options(), min_done: int | None = None,
+          deadline: float | None = None) -> Model:
+    """The model of ``instance`` with horizon ``T``. With ``min_done``, ``done[k]`` literals for
+    ``k = min_done .. T`` are added for an incremental makespan search by assumptions. Raises
+    :class:`OutOfTime` if building passes ``deadline`` (a ``time.perf_counter()`` value)."""
+    return _Builder(instance, T, options, deadline).build(min_done)
+
+
+class _Builder:
+    def __init__(self, instance: Instance, T: int, options: Options, deadline: float | None = None) -> None:
+        self.deadline = deadline
+        if options.connectivity not in CONNECTIVITY:
+            raise ValueError(f"connectivity must be one of {CONNECTIVITY}")
+        self.inst, self.T, self.opt = instance, T, options
+        self.world = instance.world
+        self.m = Model(T)
+        self.m.true = self.m.var(("true",))
+        self.m.clauses.append([self.m.true])
+        self.state = instance.start_state
+
+    def tick(self) -> None:
+        if self.deadline is not None and time.perf_counter() > self.deadline:
+            raise OutOfTime
+
+    # ---- literals of fixed values ----------------------------------------------------------------
+
+    def const(self, value: bool) -> int:
+        return self.m.true if value else -self.m.true
+
+    def build(self, min_done: int | None) -> Model:
+        self._reachable_poses()
+        self._candidate_cells()
+        self._variables()
+        self._actions()
+        self._dynamics()
+        self._collisions()
+        if self.opt.connectivity == "eager":
+            self._connectivity()
+        if min_done is not None:
+            self._done(min_done)
+        return self.m
+
+    # ---- pruning -----------------------------------------------------------------------------
+
+    def _reachable_poses(self) -> None:
+        """R[i][t]: bool mask of the poses robot i may have at time t."""
+        T, goals = self.T, self.inst.goal_cells
+        self.R = []
+        for i, g in enumerate(self.world.graphs):
+            start = self.state.poses[i]
+            if self.opt.prune_reach:
+                relaxed = Relaxed(g)
+                fwd = relaxed.from_pose(start)
+                bwd = relaxed.to_front(goals[i]) if goals[i] >= 0 else np.zeros(g.num_poses, np.int64)
+            else:
+                fwd = np.where(g.valid, 0, INF)
+                bwd = np.zeros(g.num_poses, np.int64)
+            masks = []
+            for t in range(T + 1):
+                mask = g.valid & (fwd <= t) & (bwd <= T - t)
+                if t == 0:
+                    mask = np.zeros(g.num_poses, bool)
+                    mask[start] = True
+                if t == T and goals[i] >= 0:
+                    mask &= g.feet[:, 0] == goals[i]
+                masks.append(mask)
+            self.R.append(masks)
+
+    def _candidate_cells(self) -> None:
+        """Cells that may hold a tile at some time."""
+        inst, n = self.inst, self.world.width * self.world.height
+        cand = inst.start.tiles | inst.goal_tiles
+        if self.opt.prune_cells:
+            for i, g in enumerate(self.world.graphs):
+                seen = np.zeros(g.num_poses, bool)
+                for mask in self.R[i]:
+                    seen |= mask
+                places = np.flatnonzero(g.kind == Kind.PLACE)
+                if len(places):
+                    t = g.target[seen][:, places]
+                    cand[t[t >= 0]] = True
+        else:
+            cand = ~self.world.obstacles.copy()
+        cand &= ~self.world.obstacles
+        self.cand = cand
+        self.cells = np.flatnonzero(cand).tolist()
+        # a pose whose feet can never stand on tiles is never used
+        for i, g in enumerate(self.world.graphs):
+            stands = cand[np.maximum(g.feet, 0)].all(axis=1) & g.valid
+            for t in range(1, self.T + 1):
+                self.R[i][t] &= stands
+
+    # ---- variables ---------------------------------------------------------------------------
+
+    def _variables(self) -> None:
+        m, T, inst = self.m, self.T, self.inst
+        goal, start = inst.goal_tiles, inst.start.tiles
+        for t in range(T + 1):
+            for c in self.cells:
+                if t == 0:
+                    m.tile[(t, c)] = self.const(bool(start[c]))
+                elif t == T:
+                    m.tile[(t, c)] = self.const(bool(goal[c]))
+                else:
+                    m.tile[(t, c)] = m.var(("tile", t, c))
+        self.carry = {}
+        for i in range(inst.num_robots):
+            for t in range(T + 1):
+                if t == 0:
+                    self.carry[(i, t)] = self.const(self.state.carrying[i])
+                elif t == T:
+                    self.carry[(i, t)] = self.const(False)
+                else:
+                    self.carry[(i, t)] = m.var(("carry", i, t))
+        self.x = {}
+        for i in range(inst.num_robots):
+            self.x[(i, 0, self.state.poses[i])] = m.true
+            for t in range(1, T + 1):
+                for p in np.flatnonzero(self.R[i][t]).tolist():
+                    self.x[(i, t, p)] = m.var(("x", i, t, p))
+
+    def tile(self, t: int, c: int) -> int:
+        return self.m.tile.get((t, c), -self.m.true)
+
+    # ---- actions and poses -------------------------------------------------------------------
+
+    def _actions(self) -> None:
+        m, T = self.m, self.T
+        for i, g in enumerate(self.world.graphs):
+            kinds = g.kind
+            for t in range(1, T + 1):
+                self.tick()
+                prev, nxt = self.R[i][t - 1], self.R[i][t]
+                ps = np.flatnonzero(prev)
+                succ = g.succ[ps]
+                ok = (succ >= 0) & nxt[np.maximum(succ, 0)]
+                tgt = g.target[ps]
+                manip = np.isin(kinds, (Kind.PICK, Kind.PLACE))[None, :]
+                ok &= ~manip | ((tgt >= 0) & self.cand[np.maximum(tgt, 0)])
+                rows, acts = np.nonzero(ok)
+                group = []
+                for r, a in zip(rows.tolist(), acts.tolist()):
+                    p = int(ps[r])
+                    v = m.var(("y", i, t, p, a))
+                    group.append((v, p, a))
+                    if kinds[a] == Kind.MOTION:
+                        m.motion.append(v)
+                m.y[(i, t)] = group
+                m.exactly_one.append([v for v, _, _ in group])
+                incoming = defaultdict(list)
+                for v, p, a in group:
+                    q = int(g.succ[p, a])
+                    m.clauses.append([-v, self.x[(i, t - 1, p)]])
+                    m.clauses.append([-v, self.x[(i, t, q)]])
+                    incoming[q].append(v)
+                for p in np.flatnonzero(nxt).tolist():
+                    m.clauses.append([-self.x[(i, t, p)]] + incoming.get(p, []))
+                # new feet on tiles (rule 4)
+                for p in np.flatnonzero(nxt).tolist():
+                    for c in set(g.feet[p].tolist()):
+                        m.clauses.append([-self.x[(i, t, p)], self.tile(t, c)])
+
+    def _dynamics(self) -> None:
+        """Preconditions (rule 1), carrying, and tiles appearing and vanishing."""
+        m, T = self.m, self.T
+        picks, places = defaultdict(list), defaultdict(list)
+        for i, g in enumerate(self.world.graphs):
+            for t in range(1, T + 1):
+                was, now = self.carry[(i, t - 1)], self.carry[(i, t)]
+                my_picks, my_places = [], []
+                for v, p, a in m.y[(i, t)]:
+                    kind = g.kind[a]
+                    if kind == Kind.PICK:
+                        c = int(g.target[p, a])
+                        m.clauses += [[-v, -was], [-v, now], [-v, self.tile(t - 1, c)], [-v, -self.tile(t, c)]]
+                        picks[(t, c)].append(v)
+                        my_picks.append(v)
+                    elif kind == Kind.PLACE:
+                        c = int(g.target[p, a])
+                        m.clauses += [[-v, was], [-v, -now], [-v, -self.tile(t - 1, c)], [-v, self.tile(t, c)]]
+                        places[(t, c)].append(v)
+                        my_places.append(v)
+                    elif not g.carry_ok[p, a]:
+                        m.clauses.append([-v, -was])  # a carried tile would leave the workspace
+                m.clauses.append([-now, was] + my_picks)
+                m.clauses.append([-was, now] + my_places)
+        for t in range(1, T + 1):
+            for c in self.cells:
+                m.clauses.append([-self.tile(t, c), self.tile(t - 1, c)] + places[(t, c)])
+                m.clauses.append([-self.tile(t - 1, c), self.tile(t, c)] + picks[(t, c)])
+
+    def _collisions(self) -> None:
+        """Per step and cell, at most one robot's collision set (rule 3)."""
+        m = self.m
+        if self.inst.num_robots < 2:
+            return
+        for t in range(1, self.T + 1):
+            self.tick()
+            users = defaultdict(lambda: defaultdict(list))  # cell -> robot -> [(y, conditional?)]
+            for i, g in enumerate(self.world.graphs):
+                for v, p, a in m.y[(i, t)]:
+                    for c in g.coll[p, a].tolist():
+                        if c >= 0:
+                            users[c][i].append((v, False))
+                    for c in g.carry[p, a].tolist():
+                        if c >= 0:
+                            users[c][i].append((v, True))
+            for c, by_robot in users.items():
+                if len(by_robot) < 2:
+                    continue
+                group = []
+                for i, uses in by_robot.items():
+                    occ = m.var(("occ", i, t, c))
+                    group.append(occ)
+                    was = self.carry[(i, t - 1)]
+                    for v, conditional in uses:
+                        m.clauses.append([-v, -was, occ] if conditional else [-v, occ])
+                m.at_most_one.append(group)
+
+    # ---- connectivity (rule 5), eager ---------------------------------------------------------
+
+    def _connectivity(self) -> None:
+        """Layered reachability from the first tile (in cell order) at every inner time point."""
+        m, W = self.m, self.world.width
+        cells = self.cells
+        layers = max(1, min(len(cells), int(self.inst.goal_tiles.sum())) - 1)
+        nbrs = {c: [c + dy * W + dx for dx, dy in HEADING_VECTORS
+                    if 0 <= c % W + dx < W and 0 <= c // W + dy < self.world.height and self.cand[c + dy * W + dx]]
+                for c in cells}
+        for t in range(1, self.T):
+            self.tick()
+            none_before = m.true  # no tile in the cells before this one
+            reach_prev = {}
+            for c in cells:
+                tile = self.tile(t, c)
+                root = m.var(("root", t, c))
+                m.clauses += [[-root, tile], [-root, none_before], [-tile, -none_before, root]]
+                nb = m.var(("none_before", t, c))
+                m.clauses += [[-nb, none_before], [-nb, -tile], [-none_before, tile, nb]]
+                none_before = nb
+                reach_prev[c] = root
+            for k in range(1, layers + 1):
+                reach = {}
+                for c in cells:
+                    r = m.var(("reach", t, c, k))
+                    m.clauses.append([-r, reach_prev[c]] + [reach_prev[n] for n in nbrs[c]])
+                    m.clauses.append([-r, self.tile(t, c)])
+                    reach[c] = r
+                reach_prev = reach
+            for c in cells:
+                m.clauses.append([-self.tile(t, c), reach_prev[c]])
+
+    def _done(self, min_done: int) -> None:
+        m = self.m
+        for k in range(max(0, min_done), self.T + 1):
+            d = m.var(("done", k))
+            m.done[k] = d
+            for i, g in enumerate(self.world.graphs):
+                for t in range(k + 1, self.T + 1):
+                    waits = [v for v, p, a in m.y[(i, t)] if g.kind[a] == Kind.WAIT]
+                    m.clauses.append([-d] + waits)
+
+
+def decode(model: Model, instance: Instance, value) -> np.ndarray:
+    """Action ids ``int[m, T]`` from a solution (``value(var) -> bool``)."""
+    ids = np.zeros((instance.num_robots, model.T), dtype=np.int64)
+    for (i, t), group in model.y.items():
+        for v, _, a in group:
+            if value(v):
+                ids[i, t - 1] = a
+                break
+    return ids
+
+
+def tiles_at(model: Model, instance: Instance, value) -> list[np.ndarray]:
+    """The tile mask of every time point of a solution."""
+    n = instance.width * instance.height
+    out = []
+    for t in range(model.T + 1):
+        mask = np.zeros(n, dtype=bool)
+        for (tt, c), lit in model.tile.items():
+            if tt == t and (value(lit) if lit > 0 else not value(-lit)):
+                mask[c] = True
+        out.append(mask)
+    return out
+
+
+def connectivity_cuts(model: Model, instance: Instance, masks: list[np.ndarray]) -> list[list[int]]:
+    """Clauses excluding the disconnected tile sets of a solution, at every inner time point.
+
+    For a component ``S`` of a disconnected step and a tile ``c'`` of another component: not
+    (all of ``S`` tiles, none of ``S``'s neighbour cells a tile, and ``c'`` a tile). True of every
+    connected tile set, false of this one.
+    """
+    W, H = instance.width, instance.height
+    cuts, seen = [], set()
+    for mask in masks:
+        labels, count = components(mask, W, H)
+        if count <= 1:
+            continue
+        comps = [np.flatnonzero(labels == k + 1).tolist() for k in range(count)]
+        for k, S in enumerate(comps):
+            other = comps[(k + 1) % count][0]
+            border = set()
+            for c in S:
+                for dx, dy in HEADING_VECTORS:
+                    x, y = c % W + dx, c // W + dy
+                    if 0 <= x < W and 0 <= y < H and not mask[y * W + x]:
+                        border.add(y * W + x)
+            key = (tuple(S), tuple(sorted(border)), other)
+            if key in seen:
+                continue
+            seen.add(key)
+            for t in range(1, model.T):
+                lits = [-model.tile[(t, c)] for c in S if (t, c) in model.tile]
+                lits += [model.tile[(t, c)] for c in border if (t, c) in model.tile]
+                if (t, other) in model.tile:
+                    lits.append(-model.tile[(t, other)])
+                cuts.append(lits)
+    return cuts

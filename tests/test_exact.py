@@ -1,0 +1,123 @@
+"""Exact solvers: both back ends agree with breadth-first search on tiny instances."""
+import pytest
+
+from bille.instances import OptionError, load_instance
+from bille.instances.bundled import bundled_path
+from bille.solvers import solve, validate
+from bille.solvers.bounds import lower_bound
+from helpers import make
+
+TINY = {
+    "point-walk": lambda: make("TTTT\nT..T\nTTTT", [{"at": [0, 0]}], moveset="point", robot_goals=[[3, 2]]),
+    "point-pass": lambda: make("TTTTT\n..T..", [{"at": [0, 0]}, {"at": [4, 0]}], moveset="point",
+                               robot_goals=[[4, 0], [0, 0]]),
+    "point-move-tile": lambda: make("TTT.\n....", [{"at": [1, 0]}], goal="TT..\n.T..", moveset="point"),
+    "s5-move-tile": lambda: make(".....\nTTTT.\nTTTT.\n.....", [{"front": [1, 2], "back": [0, 2]}],
+                                 goal=".....\n.TTTT\nTTTT.\n.....", moveset="S5"),
+    "s7-carry-place": lambda: make("....\nTTT.\n....", [{"front": [1, 1], "back": [0, 1], "carrying": True}],
+                                   goal="....\nTTTT\n....", moveset="S7"),
+    "s7-two-robots": lambda: make("TTTT\nTTTT", [{"front": [1, 0], "back": [0, 0]}, {"front": [2, 1], "back": [3, 1]}],
+                                  robot_goals=[[3, 0], [0, 1]]),
+    # cooperation: the tile at (4, 0) must go to (0, 0), but in the one-tile corridor the robots
+    # can never pass each other: robot 1 can reach the tile, only robot 0 the place
+    "handover": lambda: make("....T\nTTTTT", [{"at": [1, 1]}, {"at": [3, 1]}], goal="T....\nTTTTT",
+                             moveset="point", robot_goals=[[1, 1], [3, 1]]),
+}
+
+
+@pytest.fixture(scope="module")
+def optimum():
+    cache = {}
+
+    def get(name):
+        if name not in cache:
+            result = solve(TINY[name](), "bfs", time_limit=300)
+            assert result.status == "optimal"
+            cache[name] = result.metrics.makespan
+        return cache[name]
+
+    return get
+
+
+@pytest.mark.parametrize("name", TINY)
+@pytest.mark.parametrize("method", ["cpsat", "sat"])
+@pytest.mark.parametrize("connectivity", ["lazy", "eager"])
+def test_exact_makespan_equals_breadth_first_search(name, method, connectivity, optimum):
+    inst = TINY[name]()
+    result = solve(inst, method, connectivity=connectivity, time_limit=120)
+    assert result.status == "optimal", result.stats
+    assert validate(inst, result.schedule).valid
+    assert result.metrics.makespan == result.lower_bound == optimum(name)
+
+
+def test_cooperation_is_needed_and_found():
+    inst = TINY["handover"]()
+    result = solve(inst, "cpsat", time_limit=120)
+    assert result.status == "optimal"
+    # robot 0 cannot stay out of it: it picks or places the tile, or climbs onto a tile placed
+    # for it so that robot 1 can pass
+    steps = result.schedule.actions[0]
+    assert any(a.startswith(("pick", "place", "north")) for a in steps)
+
+
+@pytest.mark.parametrize("method", ["cpsat", "sat"])
+def test_travel_is_minimized_at_the_optimal_makespan(method):
+    inst = TINY["s7-two-robots"]()
+    plain = solve(inst, method, minimize_travel=False)
+    best = solve(inst, method)
+    assert best.metrics.makespan == plain.metrics.makespan
+    assert best.metrics.tiles_traveled <= plain.metrics.tiles_traveled
+    assert best.stats["tiles_traveled_optimal"]
+    other = "sat" if method == "cpsat" else "cpsat"
+    assert solve(inst, other).metrics.tiles_traveled == best.metrics.tiles_traveled
+
+
+@pytest.mark.parametrize("method", ["cpsat", "sat"])
+def test_an_obstacle_wall_is_infeasible(method):
+    # the tiles must move to the other side of a wall no robot can reach around
+    inst = make("TT#..\nTT#..", [{"at": [0, 0]}], goal="..#TT\n..#TT", moveset="point")
+    assert lower_bound(inst).impossible
+    result = solve(inst, method, time_limit=60)
+    assert result.status == "infeasible" and result.schedule is None
+
+
+@pytest.mark.parametrize("method", ["cpsat", "sat"])
+def test_infeasible_within_the_horizon_cap(method):
+    # an S5 robot on three tiles cannot turn around (breadth-first search proves it); the
+    # encodings prove every horizon up to the cap infeasible
+    inst = make("TTT\n...", [{"front": [1, 0], "back": [0, 0]}], moveset="S5", robot_goals=[[0, 0]])
+    assert solve(inst, "bfs").status == "infeasible"
+    result = solve(inst, method, max_makespan=8, time_limit=120)
+    assert result.status == "infeasible" and "horizon cap 8" in result.stats["reason"]
+
+
+@pytest.mark.parametrize("method", ["cpsat", "sat"])
+def test_a_timeout_returns_the_bound_not_a_crash(method):
+    inst = load_instance(bundled_path("bridge-2"))
+    result = solve(inst, method, time_limit=1.0)
+    assert result.status in ("timeout", "optimal")
+    if result.status == "timeout":
+        assert result.schedule is None and result.lower_bound >= lower_bound(inst).lower
+
+
+@pytest.mark.parametrize("method", ["cpsat", "sat"])
+def test_bad_options_are_rejected(method):
+    inst = TINY["point-walk"]()
+    with pytest.raises(OptionError, match="below the makespan lower bound"):
+        solve(inst, method, max_makespan=1)
+    with pytest.raises(OptionError, match="time limit"):
+        solve(inst, method, time_limit=0)
+    with pytest.raises(OptionError, match="connectivity"):
+        solve(inst, method, connectivity="magic")
+
+
+def test_pruning_cuts_the_model_and_keeps_the_answer():
+    from bille.encodings.model import Options, build
+
+    inst = load_instance(bundled_path("corridor-2"))
+    full = build(inst, 13, Options(prune_reach=False, prune_cells=False)).size()
+    pruned = build(inst, 13, Options()).size()
+    assert pruned["variables"] < full["variables"] and pruned["clauses"] < full["clauses"]
+    a = solve(inst, "sat", prune=False, minimize_travel=False)
+    b = solve(inst, "sat", minimize_travel=False)
+    assert a.metrics.makespan == b.metrics.makespan == 13
