@@ -15,7 +15,7 @@ import time
 
 from bille.instances import Instance, OptionError
 
-from .joint import JointProblem, makespan_bound, to_result
+from .joint import OBJECTIVE, JointProblem, makespan_bound, to_result
 
 
 def plan(instance: Instance, *, epsilon: float = 1.0, time_limit: float | None = None,
@@ -34,7 +34,7 @@ def plan(instance: Instance, *, epsilon: float = 1.0, time_limit: float | None =
     deadline = None if time_limit is None else start_time + time_limit
     problem = JointProblem.of(instance)
     bound = makespan_bound(problem)
-    stats = {"objective": "sum of costs, then makespan", "epsilon": epsilon, "expanded": 0, "generated": 0}
+    stats = {"objective": OBJECTIVE, "epsilon": epsilon, "expanded": 0, "generated": 0}
     if problem.unreachable():
         stats["unreachable"] = problem.unreachable()
         return to_result(instance, "astar", "infeasible", None, lower_bound=None, stats=stats)

@@ -20,6 +20,7 @@ from .walking import UNREACHABLE, Walk, walk_for
 
 Poses = tuple[int, ...]
 Debts = tuple[int, ...]
+OBJECTIVE = "sum of costs, then makespan, walking only (no pick or place)"
 
 
 @dataclass

@@ -28,7 +28,7 @@ import time
 
 from bille.instances import Instance, OptionError
 
-from .joint import JointProblem, makespan_bound, to_result
+from .joint import OBJECTIVE, JointProblem, makespan_bound, to_result
 
 INF = (1 << 60, 0)
 
@@ -56,7 +56,7 @@ class _MStar:
         self.max_expansions = max_expansions
         self.problem = JointProblem.of(instance)
         self.policy = [_policy(self.problem, i) for i in range(instance.num_robots)]
-        self.stats = {"objective": "sum of costs, then makespan", "epsilon": epsilon, "od": od,
+        self.stats = {"objective": OBJECTIVE, "epsilon": epsilon, "od": od,
                       "expanded": 0, "generated": 0, "largest_collision_set": 0}
         self.g: dict = {}
         self.parent: dict = {}

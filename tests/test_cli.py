@@ -103,3 +103,32 @@ def test_the_installed_console_script(tmp_path):
     bad = subprocess.run([exe, "check", str(DATA / "ragged.instance.yaml"), "x"], capture_output=True, text=True)
     assert bad.returncode == 2 and bad.stdout == ""
     assert bad.stderr.strip() == f"bille: error: {DATA / 'ragged.instance.yaml'}:3: grid: row 1 has 2 cells, expected 3 like row 0 (the grid must be a rectangle)"
+
+
+def test_gap_reports_the_heuristics_against_the_optimum(tmp_path, capsys):
+    out_csv = tmp_path / "gap.csv"
+    code, out, _ = run(capsys, "gap", "compare-2", "corridor-2", "--methods", "temporal-astar,cpsat",
+                       "--time-limit", "60", "--csv", str(out_csv), "--json")
+    assert code == 0
+    rows = json.loads(out)["rows"]
+    by = {(r["instance"], r["method"]): r for r in rows}
+    assert by[("compare-2", "cpsat")]["status"] == "optimal" and by[("compare-2", "cpsat")]["gap_percent"] == 0.0
+    ta = by[("compare-2", "temporal-astar")]
+    assert ta["gap_percent"] == 100.0 * (ta["makespan"] - 10) / 10
+    assert by[("corridor-2", "temporal-astar")]["status"] == "n/a"
+    assert by[("corridor-2", "cpsat")]["makespan"] == 13
+    lines = out_csv.read_text().splitlines()
+    assert lines[0].startswith("instance,method,status") and len(lines) == 1 + len(rows)
+
+
+def test_gap_rejects_an_unknown_method(capsys):
+    code, out, err = run(capsys, "gap", "--methods", "temporal-astar,magic")
+    assert code == 2 and out == "" and "magic" in err
+
+
+def test_solve_exact_json(capsys, tmp_path):
+    code, out, _ = run(capsys, "solve", "crowded-3", "--method", "sat", "--json", "-o", str(tmp_path / "s.yaml"))
+    result = json.loads(out)
+    assert code == 0 and set(result) == {"method", "status", "metrics", "lower_bound", "time_s", "stats"}
+    assert result["status"] == "optimal" and result["metrics"]["makespan"] == result["lower_bound"] == 4
+    assert validate(load_instance(bundled_path("crowded-3")), load_schedule(tmp_path / "s.yaml")).valid

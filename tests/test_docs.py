@@ -31,7 +31,7 @@ def test_readme_starts_with_the_two_commands():
     readme = (ROOT / "README.md").read_text()
     block = re.search(r"```bash\n(.*?)```", readme, re.S).group(1).strip().splitlines()
     assert len(block) == 2
-    assert "pip install -e '.[test]'" in block[0] and "bille check corridor-2 corridor-2.schedule" in block[0]
+    assert "pip install -e '.[test]'" in block[0] and block[0].endswith(".venv/bin/bille gap")
     assert block[1] == ".venv/bin/python -m pytest"
     ci = (ROOT / ".ci" / "run").read_text()
     assert "pip install --quiet -e '.[test]'" in ci and ".venv/bin/python -m pytest" in ci

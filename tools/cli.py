@@ -104,15 +104,17 @@ def list_() -> int:
 @click.option("--epsilon", type=click.FloatRange(min=1.0), help="Heuristic weight (astar, mstar, temporal-astar).")
 @click.option("--horizon", "-H", type=click.IntRange(min=1), help="Steps planned ahead (temporal-astar).")
 @click.option("--time-limit", type=float, help="Seconds before giving up.")
+@click.option("--threads", type=click.IntRange(min=1), help="Solver workers (cpsat).")
 @click.option("-O", "--option", "extra", multiple=True, metavar="NAME=VALUE",
               help="Another option of the method, e.g. -O od=false or -O max_steps=200.")
 @click.option("-o", "--output", type=click.Path(dir_okay=False), help="Write the schedule here.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of text.")
-def solve_(instance: str, method: str, epsilon, horizon, time_limit, extra, output, as_json) -> int:
+def solve_(instance: str, method: str, epsilon, horizon, time_limit, threads, extra, output, as_json) -> int:
     """Solve INSTANCE with METHOD; print the status and metrics (exit 1 if no schedule)."""
     if time_limit is not None and time_limit <= 0:
         raise click.BadParameter("must be positive", param_hint="--time-limit")
-    options = {k: v for k, v in dict(epsilon=epsilon, horizon=horizon, time_limit=time_limit).items() if v is not None}
+    given = dict(epsilon=epsilon, horizon=horizon, time_limit=time_limit, threads=threads)
+    options = {k: v for k, v in given.items() if v is not None}
     options.update(_parse_options(extra))
     inst = _instance(instance)
     result = solve(inst, method, **options)
@@ -153,6 +155,44 @@ def _explain(inst, key: str, value) -> str:
     if key == "unreachable":
         return "; ".join(f"robot {i} cannot reach its goal {inst.robot_goals[i]} even alone" for i in value)
     return str(value)
+
+
+@cli.command()
+@click.argument("instances", nargs=-1)
+@click.option("--methods", default=",".join(("temporal-astar", "mstar", "astar", "cpsat", "sat")), show_default=True,
+              help="Comma-separated methods.")
+@click.option("--time-limit", type=click.FloatRange(min=0, min_open=True), default=60.0, show_default=True,
+              help="Seconds per method and instance.")
+@click.option("--threads", type=click.IntRange(min=1), default=2, show_default=True, help="CP-SAT workers.")
+@click.option("--csv", "csv_path", type=click.Path(dir_okay=False), default="gap.csv", show_default=True,
+              help="Where to write the table as CSV.")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of the table.")
+def gap(instances, methods: str, time_limit: float, threads: int, csv_path: str, as_json: bool) -> int:
+    """How far the heuristics are from the exact optimum: one table over INSTANCES (default:
+    the bundled point-4), with each method's makespan gap to the proved optimum."""
+    from pathlib import Path
+
+    from .gap import run, table, write_csv
+
+    names = [m.strip() for m in methods.split(",") if m.strip()]
+    for name in names:
+        if name not in METHODS:
+            raise click.BadParameter(f"unknown method {name!r} (expected: {', '.join(METHODS)})", param_hint="--methods")
+    loaded = [_instance(arg) for arg in (instances or ("point-4",))]
+
+    def progress(inst, method):
+        if not as_json:
+            click.echo(f"  running {method} on {inst} ...", err=True)
+
+    rows = run(loaded, names, time_limit, threads, progress)
+    write_csv(rows, Path(csv_path))
+    if as_json:
+        _print_json({"rows": rows, "csv": csv_path})
+    else:
+        for line in table(rows):
+            click.echo(line)
+        click.echo(f"written to {csv_path}")
+    return EXIT_OK
 
 
 @cli.group()
