@@ -19,8 +19,9 @@ def _lits(clause) -> list[int]:
 class CpSatBackend:
     """Solve a :class:`~.model.Model` with CP-SAT; clauses (lazy cuts) can be added between solves."""
 
-    def __init__(self, model: Model, threads: int = 1, seed: int = 0, deadline: float | None = None) -> None:
-        self.model, self.threads, self.seed = model, threads, seed
+    def __init__(self, model: Model, threads: int = 1, seed: int = 0, deadline: float | None = None,
+                 presolve: bool = True) -> None:
+        self.model, self.threads, self.seed, self.presolve = model, threads, seed, presolve
         self.cp = cp_model.CpModel()
         proto = self.cp.proto
         for _ in range(model.num_vars):
@@ -56,6 +57,7 @@ class CpSatBackend:
         solver = cp_model.CpSolver()
         solver.parameters.num_workers = self.threads
         solver.parameters.random_seed = self.seed
+        solver.parameters.cp_model_presolve = self.presolve
         if time_limit is not None:
             solver.parameters.max_time_in_seconds = max(0.01, time_limit)
         start = time.perf_counter()

@@ -37,7 +37,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from bille.instances import Instance
-from bille.instances.grid import HEADING_VECTORS, components
+from bille.instances.grid import HEADING_VECTORS, components, is_connected
 from bille.instances.moveset import Kind
 from bille.solvers.bounds import INF, Relaxed
 
@@ -196,14 +196,36 @@ class _Builder:
 
     # ---- variables ---------------------------------------------------------------------------
 
+    def _change_window(self) -> dict[int, tuple[int, int]]:
+        """Per candidate cell, the first and last step at which a robot could pick or place on
+        it (from the poses it may have); outside that window the cell keeps its start value
+        before and its goal value after."""
+        window = {}
+        for i, g in enumerate(self.world.graphs):
+            manip = np.flatnonzero(np.isin(g.kind, (Kind.PICK, Kind.PLACE)))
+            if not len(manip):
+                continue
+            for t in range(1, self.T + 1):
+                targets = g.target[self.R[i][t - 1]][:, manip]
+                for c in np.unique(targets[targets >= 0]).tolist():
+                    lo, hi = window.get(c, (t, t))
+                    window[c] = (min(lo, t), max(hi, t))
+        return window
+
     def _variables(self) -> None:
         m, T, inst = self.m, self.T, self.inst
         goal, start = inst.goal_tiles, inst.start.tiles
-        for t in range(T + 1):
-            for c in self.cells:
-                if t == 0:
+        window = self._change_window() if self.opt.prune_cells else {}
+        for c in self.cells:
+            # a cell never in reach keeps its start value; if the goal differs, the clauses of
+            # step T contradict and this horizon is infeasible
+            lo, hi = window.get(c, (T + 1, T + 1)) if self.opt.prune_cells else (1, T)
+            for t in range(T + 1):
+                if t == T:
+                    m.tile[(t, c)] = self.const(bool(goal[c]))
+                elif t < lo:
                     m.tile[(t, c)] = self.const(bool(start[c]))
-                elif t == T:
+                elif t >= hi:
                     m.tile[(t, c)] = self.const(bool(goal[c]))
                 else:
                     m.tile[(t, c)] = m.var(("tile", t, c))
@@ -333,6 +355,13 @@ class _Builder:
                 for c in cells}
         for t in range(1, self.T):
             self.tick()
+            lits = [self.tile(t, c) for c in cells]
+            if all(abs(l) == m.true for l in lits):  # the tiles are known at t: check them here
+                mask = np.zeros(self.world.width * self.world.height, dtype=bool)
+                mask[[c for c, l in zip(cells, lits) if l == m.true]] = True
+                if not is_connected(mask, self.world.width, self.world.height):
+                    m.clauses.append([-m.true])
+                continue
             none_before = m.true  # no tile in the cells before this one
             reach_prev = {}
             for c in cells:

@@ -121,5 +121,69 @@ def lower_bound(instance: Instance) -> Bounds:
         if first >= INF:
             impossible.append("no robot can ever pick a tile that must move and place it on a cell that must be filled")
         parts["first tile moved"] = first if first < INF else None
+        carry = _transport(world, relaxed, remove, fill)
+        if carry is not None:
+            work = carry + 2 * k_remove + carried
+            parts["carrying the tiles (matching)"] = -(-work // max(1, instance.num_robots))
     lower = max([v for v in parts.values() if v is not None] + [0])
     return Bounds(lower, parts, impossible)
+
+
+def _transport(world, relaxed, remove, fill) -> int | None:
+    """Least total walking while carrying the tiles that must move.
+
+    One *hop* carries a tile from cell ``u`` to cell ``v``: at least the distance from a pose
+    that picks at ``u`` to a pose that places at ``v`` (the best robot type). A tile may travel
+    in several hops, handed over between robots (a relay), so the cost of getting a tile from
+    ``u`` to ``v`` is the shortest path over hops (the metric closure). Tiles have no identity,
+    so the tiles from the cells that must empty reach the cells that must fill at no less than a
+    minimum-cost matching under that closure. Tiles carried at the start are left out (they may
+    be placed at once). None if some required pair can never be joined.
+    """
+    from scipy.optimize import linear_sum_assignment
+    from scipy.sparse.csgraph import csgraph_from_dense, floyd_warshall
+
+    rm, fl = np.flatnonzero(remove), np.flatnonzero(fill)
+    if len(rm) == 0:
+        return 0
+    if len(fl) < len(rm):
+        return None
+    cells = np.flatnonzero(~world.obstacles)
+    index = {int(c): k for k, c in enumerate(cells)}
+    hop = np.full((len(cells), len(cells)), np.inf)
+    for g, r in zip(world.graphs, relaxed):
+        picks_at = _facing_each(g, Kind.PICK, cells)
+        places_at = _facing_each(g, Kind.PLACE, cells)
+        for v, place_poses in enumerate(places_at):
+            if not len(place_poses):
+                continue
+            to_v = r.to_poses(place_poses)
+            for u, pick_poses in enumerate(picks_at):
+                if len(pick_poses):
+                    d = to_v[pick_poses].min()
+                    if d < INF:
+                        hop[u, v] = min(hop[u, v], d)
+    # from_dense with null_value=inf keeps zero-cost hops (a dense zero would mean "no edge")
+    closure = floyd_warshall(csgraph_from_dense(hop, null_value=np.inf), directed=True)
+    cost = closure[np.ix_([index[int(c)] for c in rm], [index[int(c)] for c in fl])]
+    if not np.isfinite(cost).any(axis=1).all():
+        return None
+    cost = np.where(np.isfinite(cost), cost, 1e9)
+    rows, cols = linear_sum_assignment(cost)
+    total = cost[rows, cols].sum()
+    return None if total >= 1e9 else int(total)
+
+
+def _facing_each(graph: PoseGraph, kind: Kind, cells: np.ndarray) -> list[np.ndarray]:
+    """For each cell, the poses from which an action of ``kind`` targets it."""
+    acts = np.flatnonzero(graph.kind == kind)
+    out = [[] for _ in cells]
+    if not len(acts):
+        return [np.zeros(0, np.int64) for _ in cells]
+    where = {int(c): k for k, c in enumerate(cells)}
+    p, a = np.nonzero((graph.target[:, acts] >= 0) & (graph.succ[:, acts] >= 0))
+    for pose, cell in zip(p.tolist(), graph.target[p, acts[a]].tolist()):
+        k = where.get(cell)
+        if k is not None:
+            out[k].append(pose)
+    return [np.array(x, dtype=np.int64) for x in out]

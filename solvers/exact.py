@@ -38,6 +38,7 @@ def default_cap(lower: int) -> int:
 
 
 def plan_cpsat(instance: Instance, *, time_limit: float | None = None, threads: int = 1, seed: int = 0,
+               presolve: bool = False,
                max_makespan: int | None = None, connectivity: str = "eager", minimize_travel: bool = True,
                prune: bool = True) -> Result:
     """Optimal makespan with OR-Tools CP-SAT.
@@ -46,6 +47,8 @@ def plan_cpsat(instance: Instance, *, time_limit: float | None = None, threads: 
     ----------
     time_limit : seconds for the whole search.
     threads : CP-SAT workers (1 with a fixed seed is repeatable).
+    presolve : CP-SAT's presolve; off by default: on these large Boolean models it costs more
+        than it saves (``bille bench exact`` measures it).
     max_makespan : horizon cap (default: ``max(2 LB, LB + 24)``).
     connectivity : ``eager`` (reachability layers; measured faster, see ``bille bench exact``)
         or ``lazy`` (cuts on demand).
@@ -53,7 +56,7 @@ def plan_cpsat(instance: Instance, *, time_limit: float | None = None, threads: 
     prune : reachability and candidate-cell pruning (switch off to measure them).
     """
     return _Search("cpsat", instance, time_limit, max_makespan, connectivity, minimize_travel, prune,
-                   threads=threads, seed=seed).run()
+                   threads=threads, seed=seed, presolve=presolve).run()
 
 
 def plan_sat(instance: Instance, *, time_limit: float | None = None, max_makespan: int | None = None,
@@ -123,15 +126,17 @@ class _Search:
         for T in range(max(1, self.bounds.lower), self.cap + 1):
             try:
                 model = build(self.instance, T, self.options, deadline=self.deadline)
-                backend = CpSatBackend(model, self.kw["threads"], self.kw["seed"], deadline=self.deadline)
+                backend = CpSatBackend(model, self.kw["threads"], self.kw["seed"], deadline=self.deadline,
+                                       presolve=self.kw["presolve"])
             except OutOfTime:
                 return self.result("timeout", lower=T)
             self.stats["horizons"].append({"T": T, **model.size()})
+            began = time.perf_counter()
             while True:
                 status = backend.solve(self.left())
                 if status != SAT or self._check(backend, model):
                     break
-            self.stats["horizons"][-1]["answer"] = status
+            self.stats["horizons"][-1].update(answer=status, time_s=round(time.perf_counter() - began, 3))
             if status == UNKNOWN:
                 return self.result("timeout", lower=T)
             if status == SAT:
@@ -169,9 +174,11 @@ class _Search:
             backend = SatBackend(model, self.kw["solver"])
             try:
                 while k <= T:
+                    began = time.perf_counter()
                     status = self._sat_solve(backend, model, [model.done[k]])
                     self.stats["horizons"].append({"T": k, "model_horizon": T, "variables": backend.top,
-                                                   "clauses": backend.num_clauses, "answer": status})
+                                                   "clauses": backend.num_clauses, "answer": status,
+                                                   "time_s": round(time.perf_counter() - began, 3)})
                     if status == UNKNOWN:
                         return self.result("timeout", lower=k)
                     if status == SAT:

@@ -121,3 +121,24 @@ def test_pruning_cuts_the_model_and_keeps_the_answer():
     a = solve(inst, "sat", prune=False, minimize_travel=False)
     b = solve(inst, "sat", minimize_travel=False)
     assert a.metrics.makespan == b.metrics.makespan == 13
+
+
+# ---- random tiny instances: bounds and the exact solver against breadth-first search ----------
+
+from hypothesis import HealthCheck, assume, given, settings, strategies as st  # noqa: E402
+
+from test_properties import build as random_instance, scenes  # noqa: E402
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
+@given(scene=scenes(), length=st.integers(1, 6), goals=st.lists(st.booleans(), min_size=3, max_size=3))
+def test_bounds_and_cpsat_agree_with_breadth_first_search_on_random_instances(scene, length, goals):
+    inst, *_ = random_instance(scene, length, goals)
+    assume(inst.num_robots <= 2)
+    reference = solve(inst, "bfs", max_states=20_000)
+    assume(reference.status == "optimal")
+    optimum = reference.metrics.makespan
+    assert lower_bound(inst).lower <= optimum
+    result = solve(inst, "cpsat", time_limit=60, minimize_travel=False)
+    assert result.status == "optimal" and validate(inst, result.schedule).valid
+    assert result.metrics.makespan == optimum
