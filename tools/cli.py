@@ -250,6 +250,19 @@ def bench_planners(time_limit: float, jobs: int | None, maps: str, movesets: str
     return EXIT_OK
 
 
+@bench.command("exact")
+@click.option("--time-limit", type=click.FloatRange(min=1), default=120.0, show_default=True, help="Seconds per run.")
+@click.option("--threads", type=click.IntRange(min=1), default=2, show_default=True, help="CP-SAT workers.")
+@click.option("--only", type=click.Choice(["optimum", "connectivity", "pruning", "presolve"]), multiple=True,
+              help="Run only these sections (repeatable).")
+def bench_exact(time_limit: float, threads: int, only) -> int:
+    """Exact solvers: time to optimum per map, eager vs lazy connectivity, pruning, presolve."""
+    from .bench_exact import report
+
+    report(time_limit, threads, only or ("optimum", "connectivity", "pruning", "presolve"), echo=click.echo)
+    return EXIT_OK
+
+
 @bench.command("crowd")
 @click.option("--size", type=click.IntRange(8, 512), default=64, show_default=True)
 @click.option("--robots", type=click.IntRange(1, 1000), default=50, show_default=True)

@@ -1,0 +1,94 @@
+"""Benchmarks of the exact solvers (``bille bench exact``).
+
+1. Time to the proved optimum of each bundled map, CP-SAT and SAT, as a scaling table
+   (robots, tiles, makespan, model size, time) with the SAT / CP-SAT time ratio.
+2. Connectivity: eager against lazy (time, cuts), ratio lazy / eager.
+3. Pruning: model size at the optimal horizon with and without it, and the time to the optimum.
+4. CP-SAT presolve on against off.
+
+Every run gets the same time limit; unfinished runs show their status instead of a time.
+"""
+from __future__ import annotations
+
+import time
+
+from bille.encodings.model import Options, build
+from bille.instances import load_instance
+from bille.instances.bundled import bundled_path
+from bille.solvers import solve
+
+MAPS = ["crowded-3", "compare-2", "compare-3", "compare-4", "compare-5", "compare-6", "crowded-2", "point-4",
+        "corridor-2", "reconfig-30"]
+WITH_PICKS = ["point-4", "corridor-2", "reconfig-30"]
+
+
+def _run(name, method, time_limit, **options):
+    inst = load_instance(bundled_path(name))
+    result = solve(inst, method, time_limit=time_limit, **options)
+    last = result.stats.get("horizons", [{}])[-1]
+    return inst, result, last
+
+
+def _time(result) -> str:
+    return f"{result.time_s:.1f}" if result.status == "optimal" else result.status
+
+
+def optimum_table(time_limit: float, threads: int, echo) -> None:
+    echo(f"1. time to the proved optimum (CP-SAT {threads} threads, SAT CaDiCaL; limit {time_limit:g} s per run)")
+    echo(f"   {'map':<12} {'robots':>6} {'tiles':>5} {'moved':>5} {'T*':>4} {'vars':>8} {'clauses':>9} "
+         f"{'cpsat [s]':>10} {'sat [s]':>9} {'sat/cpsat':>9}")
+    for name in MAPS:
+        inst, cp, last = _run(name, "cpsat", time_limit, threads=threads)
+        _, sat, _ = _run(name, "sat", time_limit)
+        moved = int((inst.start.tiles & ~inst.goal_tiles).sum()) + sum(r.carrying for r in inst.robots)
+        makespan = cp.metrics.makespan if cp.metrics else (sat.metrics.makespan if sat.metrics else "-")
+        ratio = f"{sat.time_s / cp.time_s:.2f}" if cp.status == sat.status == "optimal" else "-"
+        echo(f"   {name:<12} {inst.num_robots:>6} {int(inst.start.tiles.sum()):>5} {moved:>5} {makespan:>4} "
+             f"{last.get('variables', 0):>8} {last.get('clauses', 0):>9} {_time(cp):>10} {_time(sat):>9} {ratio:>9}")
+
+
+def connectivity_table(time_limit: float, threads: int, echo) -> None:
+    echo("2. connectivity: eager (reachability layers) against lazy (cuts), CP-SAT and SAT")
+    echo(f"   {'map':<12} {'method':<6} {'eager [s]':>9} {'lazy [s]':>9} {'cuts':>6} {'lazy/eager':>10}")
+    for name in WITH_PICKS:
+        for method, opts in (("cpsat", {"threads": threads}), ("sat", {})):
+            _, eager, _ = _run(name, method, time_limit, connectivity="eager", **opts)
+            _, lazy, _ = _run(name, method, time_limit, connectivity="lazy", **opts)
+            ratio = f"{lazy.time_s / eager.time_s:.2f}" if eager.status == lazy.status == "optimal" else "-"
+            echo(f"   {name:<12} {method:<6} {_time(eager):>9} {_time(lazy):>9} {lazy.stats.get('cuts', 0):>6} {ratio:>10}")
+
+
+def pruning_table(time_limit: float, threads: int, echo) -> None:
+    echo("3. pruning (reachability, candidate cells, change windows) at the optimal horizon")
+    echo(f"   {'map':<12} {'T*':>4} {'vars':>8} {'unpruned':>9} {'ratio':>6} {'clauses':>9} {'unpruned':>9} {'ratio':>6} "
+         f"{'time [s]':>9} {'unpruned':>9}")
+    for name in ("compare-4", "point-4", "corridor-2", "reconfig-30"):
+        inst = load_instance(bundled_path(name))
+        _, on, _ = _run(name, "cpsat", time_limit, threads=threads, minimize_travel=False)
+        _, off, _ = _run(name, "cpsat", time_limit, threads=threads, minimize_travel=False, prune=False)
+        T = on.metrics.makespan if on.metrics else on.lower_bound
+        a = build(inst, T, Options()).size()
+        b = build(inst, T, Options(prune_reach=False, prune_cells=False)).size()
+        echo(f"   {name:<12} {T:>4} {a['variables']:>8} {b['variables']:>9} {a['variables'] / b['variables']:>6.2f} "
+             f"{a['clauses']:>9} {b['clauses']:>9} {a['clauses'] / b['clauses']:>6.2f} {_time(on):>9} {_time(off):>9}")
+
+
+def presolve_table(time_limit: float, threads: int, echo) -> None:
+    echo("4. CP-SAT presolve (makespan search only)")
+    echo(f"   {'map':<12} {'off [s]':>8} {'on [s]':>8} {'on/off':>7}")
+    for name in ("compare-5", "corridor-2", "reconfig-30"):
+        _, off, _ = _run(name, "cpsat", time_limit, threads=threads, minimize_travel=False)
+        _, on, _ = _run(name, "cpsat", time_limit, threads=threads, minimize_travel=False, presolve=True)
+        ratio = f"{on.time_s / off.time_s:.2f}" if on.status == off.status == "optimal" else "-"
+        echo(f"   {name:<12} {_time(off):>8} {_time(on):>8} {ratio:>7}")
+
+
+def report(time_limit: float = 120.0, threads: int = 2, sections=("optimum", "connectivity", "pruning", "presolve"),
+           echo=print) -> None:
+    start = time.perf_counter()
+    tables = {"optimum": optimum_table, "connectivity": connectivity_table, "pruning": pruning_table,
+              "presolve": presolve_table}
+    for key in sections:
+        tables[key](time_limit, threads, echo)
+        echo("")
+    echo(f"total {time.perf_counter() - start:.0f} s")
