@@ -37,7 +37,7 @@ class JointProblem:
         # dist_lists[i][p] = dists[i][p]; home_lists[i][p]: pose p has robot i's front on its goal
         self.dist_lists = [d.tolist() for d in self.dists]
         self.home_lists = [[True] * w.succ.shape[0] if c < 0 else (w.graph.feet[:, 0] == c).tolist()
-                      for w, c in zip(self.walks, self.goals)]
+                           for w, c in zip(self.walks, self.goals)]
 
     @classmethod
     def of(cls, instance: Instance) -> "JointProblem":
@@ -99,27 +99,13 @@ class JointProblem:
 
         yield from extend(0, frozenset())
 
-    def collisions(self, choice: list[tuple[int, int, frozenset]]) -> frozenset[int]:
-        """Robots whose collision sets meet another's in one joint move (M*'s Psi)."""
-        hit = set()
-        for i in range(len(choice)):
-            for j in range(i + 1, len(choice)):
-                if not choice[i][2].isdisjoint(choice[j][2]):
-                    hit.update((i, j))
-        return frozenset(hit)
-
     def transition(self, poses: Poses, debts: Debts, nxt: Poses) -> tuple[int, Debts]:
         """Sum-of-costs increment and new debts of a joint step."""
         total, new = 0, []
-        for home, p, q, d in zip(self.home_lists, poses, nxt, debts):
-            if home[p]:  # robots without a goal are always home and never pay
-                if home[q]:
-                    new.append(d + 1)
-                    continue
-                total += 1 + d
-            else:
-                total += 1
-            new.append(0)
+        for i, (p, q, d) in enumerate(zip(poses, nxt, debts)):
+            cost, debt = self.step_cost(i, p, q, d)
+            total += cost
+            new.append(debt)
         return total, tuple(new)
 
 
