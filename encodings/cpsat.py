@@ -42,9 +42,10 @@ class CpSatBackend:
                 raise OutOfTime
 
     def solve(self, time_limit: float | None, minimize: list[int] | None = None,
-              hint: list[int] | None = None) -> str:
+              hint: list[int] | None = None, presolve: bool | None = None) -> str:
         """``sat`` (proved optimal when minimizing), ``unsat`` or ``unknown``; a solution found
-        without proof of its minimum also returns ``unknown``, with :attr:`values` set."""
+        without proof of its minimum also returns ``unknown``, with :attr:`values` set.
+        ``presolve`` overrides the backend's setting for this call."""
         proto = self.cp.proto
         if minimize is not None:
             proto.clear_objective()
@@ -57,7 +58,7 @@ class CpSatBackend:
         solver = cp_model.CpSolver()
         solver.parameters.num_workers = self.threads
         solver.parameters.random_seed = self.seed
-        solver.parameters.cp_model_presolve = self.presolve
+        solver.parameters.cp_model_presolve = self.presolve if presolve is None else presolve
         if time_limit is not None:
             solver.parameters.max_time_in_seconds = max(0.01, time_limit)
         start = time.perf_counter()

@@ -47,8 +47,10 @@ def plan_cpsat(instance: Instance, *, time_limit: float | None = None, threads: 
     ----------
     time_limit : seconds for the whole search.
     threads : CP-SAT workers (1 with a fixed seed is repeatable).
-    presolve : CP-SAT's presolve; off by default: on these large Boolean models it costs more
-        than it saves (``bille bench exact`` measures it).
+    presolve : CP-SAT's presolve for the makespan search; off by default: on these large
+        Boolean models it costs more than it saves (``bille bench exact`` measures it). The
+        minimization of tiles traveled always presolves: an objective profits from it (compare-6:
+        1.8 s with it, 120 s without).
     max_makespan : horizon cap (default: ``max(2 LB, LB + 24)``).
     connectivity : ``eager`` (reachability layers; measured faster, see ``bille bench exact``)
         or ``lazy`` (cuts on demand).
@@ -152,7 +154,7 @@ class _Search:
             return ids
         hint = list(backend.values)  # the first solution, to start the minimization from
         while True:
-            status = backend.solve(self.left(), minimize=model.motion, hint=hint)
+            status = backend.solve(self.left(), minimize=model.motion, hint=hint, presolve=True)
             if backend.values is None:
                 return ids  # timed out before any better solution: keep the first one
             if not self._check(backend, model):
