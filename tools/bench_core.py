@@ -87,11 +87,16 @@ def random_walk(inst: Instance, steps: int, seed: int) -> Schedule:
     return Schedule.from_ids(inst, ids), state
 
 
-def bench_validate(size: int = 64, robots: int = 20, steps: int = 1000, seed: int = 0, repeat: int = 3) -> dict:
+def walk_instance(size: int = 64, robots: int = 20, steps: int = 1000, seed: int = 0) -> tuple[Instance, Schedule]:
+    """A random instance and a valid random-walk schedule for it (the goal is where it ends)."""
     inst = random_instance(size, robots, seed)
     sched, final = random_walk(inst, steps, seed)
     goal = Grid.from_masks(size, size, inst.start.obstacles, final.tiles)
-    inst = Instance(inst.name, inst.moveset, inst.start, inst.robots, goal=goal)
+    return Instance(inst.name, inst.moveset, inst.start, inst.robots, goal=goal), sched
+
+
+def bench_validate(size: int = 64, robots: int = 20, steps: int = 1000, seed: int = 0, repeat: int = 3) -> dict:
+    inst, sched = walk_instance(size, robots, steps, seed)
     text = dump_schedule(sched)
 
     def best(fn):

@@ -46,11 +46,16 @@ def cli() -> None:
 @click.argument("instance")
 @click.argument("schedule")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of text.")
-def check(instance: str, schedule: str, as_json: bool) -> int:
+@click.option("--rerun", "rrd", type=click.Path(dir_okay=False), metavar="OUT.rrd",
+              help="Also write a rerun recording; a violation is marked at its step.")
+def check(instance: str, schedule: str, as_json: bool, rrd: str | None) -> int:
     """Check SCHEDULE against the rules for INSTANCE (exit 0 valid, 1 invalid, 2 bad input)."""
+    _writable(rrd)
     inst = _instance(instance)
     sched = _schedule(schedule)
     report = validate(inst, sched)
+    if rrd:
+        _record([_trace(inst, sched, _label(schedule))], rrd, quiet=as_json)
     if as_json:
         _print_json(report.to_json())
     elif report.valid:
@@ -108,11 +113,14 @@ def list_() -> int:
 @click.option("-O", "--option", "extra", multiple=True, metavar="NAME=VALUE",
               help="Another option of the method, e.g. -O od=false or -O max_steps=200.")
 @click.option("-o", "--output", type=click.Path(dir_okay=False), help="Write the schedule here.")
+@click.option("--rerun", "rrd", type=click.Path(dir_okay=False), metavar="OUT.rrd",
+              help="Write a rerun recording of the schedule found.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of text.")
-def solve_(instance: str, method: str, epsilon, horizon, time_limit, threads, extra, output, as_json) -> int:
+def solve_(instance: str, method: str, epsilon, horizon, time_limit, threads, extra, output, rrd, as_json) -> int:
     """Solve INSTANCE with METHOD; print the status and metrics (exit 1 if no schedule)."""
     if time_limit is not None and time_limit <= 0:
         raise click.BadParameter("must be positive", param_hint="--time-limit")
+    _writable(output, rrd)
     given = dict(epsilon=epsilon, horizon=horizon, time_limit=time_limit, threads=threads)
     options = {k: v for k, v in given.items() if v is not None}
     options.update(_parse_options(extra))
@@ -120,6 +128,8 @@ def solve_(instance: str, method: str, epsilon, horizon, time_limit, threads, ex
     result = solve(inst, method, **options)
     if output and result.schedule is not None:
         save_schedule(result.schedule, output)
+    if rrd:  # without a schedule the recording shows the instance
+        _record([_trace(inst, result.schedule, method)], rrd, quiet=as_json)
     if as_json:
         _print_json(result.to_json())
         return EXIT_OK if result.schedule is not None else EXIT_NO
@@ -166,8 +176,10 @@ def _explain(inst, key: str, value) -> str:
 @click.option("--threads", type=click.IntRange(min=1), default=2, show_default=True, help="CP-SAT workers.")
 @click.option("--csv", "csv_path", type=click.Path(dir_okay=False), default="gap.csv", show_default=True,
               help="Where to write the table as CSV.")
+@click.option("--rerun", "rrd", type=click.Path(dir_okay=False), metavar="OUT.rrd",
+              help="Write every schedule found to one rerun recording, side by side per instance.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of the table.")
-def gap(instances, methods: str, time_limit: float, threads: int, csv_path: str, as_json: bool) -> int:
+def gap(instances, methods: str, time_limit: float, threads: int, csv_path: str, rrd: str | None, as_json: bool) -> int:
     """How far the heuristics are from the exact optimum: one table over INSTANCES (default:
     the bundled point-4), with each method's makespan gap to the proved optimum."""
     from pathlib import Path
@@ -178,14 +190,21 @@ def gap(instances, methods: str, time_limit: float, threads: int, csv_path: str,
     for name in names:
         if name not in METHODS:
             raise click.BadParameter(f"unknown method {name!r} (expected: {', '.join(METHODS)})", param_hint="--methods")
+    _writable(csv_path, rrd)
     loaded = [_instance(arg) for arg in (instances or ("point-4",))]
 
     def progress(inst, method):
         if not as_json:
             click.echo(f"  running {method} on {inst} ...", err=True)
 
-    rows = run(loaded, names, time_limit, threads, progress)
+    schedules: dict = {}
+    rows = run(loaded, names, time_limit, threads, progress, schedules=schedules)
     write_csv(rows, Path(csv_path))
+    if rrd:
+        by_name = {inst.name: inst for inst in loaded}
+        traces = [_trace(by_name[name], sched, f"{name}/{method}") for (name, method), sched in schedules.items()]
+        if traces:
+            _record(traces, rrd, quiet=as_json)
     if as_json:
         _print_json({"rows": rows, "csv": csv_path})
     else:
@@ -193,6 +212,117 @@ def gap(instances, methods: str, time_limit: float, threads: int, csv_path: str,
             click.echo(line)
         click.echo(f"written to {csv_path}")
     return EXIT_OK
+
+@cli.command()
+@click.argument("instance")
+@click.argument("schedules", nargs=-1)
+@click.option("--rerun", "rrd", type=click.Path(dir_okay=False), metavar="OUT.rrd",
+              help="Write a rerun recording (schedules side by side; open it with 'rerun OUT.rrd').")
+@click.option("--spawn", is_flag=True, help="Also open the rerun viewer, where a display exists.")
+@click.option("--png", type=click.Path(dir_okay=False), metavar="OUT.png",
+              help="Write a picture: one row per schedule, the chosen frames side by side.")
+@click.option("--gif", type=click.Path(dir_okay=False), metavar="OUT.gif",
+              help="Write an animation of the whole schedule(s).")
+@click.option("--frames", default="auto", show_default=True,
+              help="Frames of the PNG: auto (start, end, three between), all, end, or numbers like 0,5,9.")
+@click.option("--fps", type=click.FloatRange(min=0.1, max=50), default=4.0, show_default=True, help="GIF frames per second.")
+@click.option("--cell", type=click.IntRange(4, 256), default=32, show_default=True, help="Pixels per grid cell.")
+@click.option("--label", "labels", multiple=True, help="A name per schedule, in order (default: the file names).")
+def view(instance: str, schedules, rrd, spawn: bool, png, gif, frames: str, fps: float, cell: int, labels) -> int:
+    """Look at SCHEDULES (any number, none for the instance alone) on INSTANCE: a rerun
+    recording, a picture or an animation (exit 1 if a schedule breaks a rule)."""
+    if not (rrd or spawn or png or gif):
+        raise click.UsageError("nothing to do: give --rerun, --spawn, --png or --gif")
+    if labels and len(labels) != len(schedules):
+        raise click.BadParameter(f"{len(labels)} labels for {len(schedules)} schedules", param_hint="--label")
+    _writable(rrd, png, gif)
+    inst = _instance(instance)
+    names = list(labels) or _unique([_label(arg) for arg in schedules])
+    traces = [_trace(inst, _schedule(arg), name) for arg, name in zip(schedules, names)] or [_trace(inst, None, inst.name)]
+    if png:
+        from .pictures import choose_frames
+
+        choose_frames(frames, max(t.steps for t in traces))  # a bad --frames fails before any file is written
+    if rrd or spawn:
+        _record(traces, rrd, spawn=spawn)
+    if png:
+        from .pictures import save_png
+
+        layout = save_png(traces, png, frames, cell)
+        click.echo(f"picture written to {png} ({layout.size_px[0]}x{layout.size_px[1]} pixels)")
+    if gif:
+        from rich.progress import Progress
+
+        from .pictures import save_gif
+
+        with Progress(transient=True, console=_stderr_console()) as bar:
+            task = bar.add_task("drawing frames", total=max(t.steps for t in traces) + 1)
+            layout = save_gif(traces, gif, fps, cell, progress=lambda done, total: bar.update(task, completed=done))
+        click.echo(f"animation written to {gif} ({max(t.steps for t in traces) + 1} frames)")
+    bad = [t for t in traces if t.violation is not None]
+    for t in bad:
+        click.echo(f"{t.label}: invalid: {t.violation}")
+    return EXIT_NO if bad else EXIT_OK
+
+
+def _stderr_console():
+    from rich.console import Console
+
+    return Console(stderr=True)
+
+
+def _writable(*paths) -> None:
+    """Fail before any work when an output file cannot be created (a missing folder, a folder
+    in its place, no permission)."""
+    import os
+    from pathlib import Path
+
+    for p in paths:
+        if not p:
+            continue
+        path = Path(p)
+        folder = path.parent if str(path.parent) else Path(".")
+        if path.is_dir():
+            raise BilleError(f"{path}: cannot write (a folder of that name exists)")
+        if not folder.is_dir():
+            raise BilleError(f"{path}: cannot write (no folder {folder})")
+        if not os.access(folder, os.W_OK) or (path.exists() and not os.access(path, os.W_OK)):
+            raise BilleError(f"{path}: cannot write (permission denied)")
+
+
+def _label(arg: str) -> str:
+    from pathlib import Path
+
+    name = Path(arg).name
+    for suffix in (".yaml", ".yml"):
+        name = name.removesuffix(suffix)
+    return name
+
+
+def _unique(names: list[str]) -> list[str]:
+    seen: dict[str, int] = {}
+    out = []
+    for n in names:
+        seen[n] = seen.get(n, 0) + 1
+        out.append(n if seen[n] == 1 else f"{n}-{seen[n]}")
+    return out
+
+
+def _trace(inst, schedule, label: str):
+    from .recording import entity_label
+    from .trace import trace
+
+    return trace(inst, schedule, entity_label(label))
+
+
+def _record(traces, path, *, spawn: bool = False, quiet: bool = False) -> None:
+    from .recording import record
+
+    info = record(traces, path, spawn=spawn)
+    if info["viewer"]:
+        click.echo(f"bille: note: the viewer was not opened: {info['viewer']}", err=True)
+    if path and not quiet:
+        click.echo(f"recording written to {path} (steps 0..{info['frames'] - 1}, {info['bytes'] / 1e3:.0f} kB)")
 
 
 @cli.group()

@@ -18,7 +18,10 @@ EXACT = ("cpsat", "sat", "bfs")
 FIELDS = ["instance", "method", "status", "makespan", "tiles_traveled", "time_s", "gap_percent", "note"]
 
 
-def run(instances: list[Instance], methods, time_limit: float, threads: int = 1, progress=None) -> list[dict]:
+def run(instances: list[Instance], methods, time_limit: float, threads: int = 1, progress=None,
+        schedules: dict | None = None) -> list[dict]:
+    """One row per instance and method; ``schedules``, if given, receives every schedule found
+    under ``(instance name, method)``."""
     rows = []
     for inst in instances:
         mine = []
@@ -35,6 +38,8 @@ def run(instances: list[Instance], methods, time_limit: float, threads: int = 1,
                                  tiles_traveled=None, time_s=None, gap_percent=None, note=str(exc)))
                 continue
             m = result.metrics
+            if schedules is not None and result.schedule is not None:
+                schedules[inst.name, method] = result.schedule
             note = result.stats.get("failure") or result.stats.get("reason") or ""
             if not note and "objective" in result.stats:
                 note = "walking only: optimizes the sum of costs"
