@@ -35,3 +35,21 @@ def test_readme_starts_with_the_two_commands():
     assert block[1] == ".venv/bin/python -m pytest"
     ci = (ROOT / ".ci" / "run").read_text()
     assert "pip install --quiet -e '.[test]'" in ci and ".venv/bin/python -m pytest" in ci
+
+
+def test_readme_and_docs_pictures_exist():
+    for doc in [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]:
+        for target in re.findall(r"!\[[^\]]*\]\(([^)]+)\)", doc.read_text()):
+            picture = (doc.parent / target)
+            assert picture.is_file() and picture.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", f"{doc.name}: {target}"
+
+
+def test_readme_commands_exist():
+    from bille.tools.cli import cli
+
+    readme = (ROOT / "README.md").read_text()
+    blocks = "\n".join(re.findall(r"```bash\n(.*?)```", readme, re.S))
+    commands = [c for c in re.findall(r"^bille ([a-z-]+)", blocks, re.M) if not c.startswith("-")]
+    assert len(commands) > 10
+    for command in commands:
+        assert command in cli.commands, command

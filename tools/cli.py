@@ -393,6 +393,20 @@ def bench_exact(time_limit: float, threads: int, only) -> int:
     return EXIT_OK
 
 
+@bench.command("view")
+@click.option("--size", type=click.IntRange(8, 512), default=64, show_default=True)
+@click.option("--robots", type=click.IntRange(1, 200), default=20, show_default=True)
+@click.option("--steps", type=click.IntRange(1, 100_000), default=1000, show_default=True)
+@click.option("--seed", type=int, default=0, show_default=True)
+def bench_view(size: int, robots: int, steps: int, seed: int) -> int:
+    """Time and size of a rerun recording and a picture of a long schedule."""
+    from .bench_view import report
+
+    for line in report(size, robots, steps, seed):
+        click.echo(line)
+    return EXIT_OK
+
+
 @bench.command("crowd")
 @click.option("--size", type=click.IntRange(8, 512), default=64, show_default=True)
 @click.option("--robots", type=click.IntRange(1, 1000), default=50, show_default=True)
