@@ -8,10 +8,15 @@ step ``k``), incrementally, rebuilding only when the range is exhausted. With la
 each solution is checked step by step and a disconnected one adds cuts for every step before the
 solver goes on. Then, at the optimal makespan, tiles traveled are minimized (``minimize_travel``).
 
+Incumbent: on a path-planning instance Temporal A* runs first (a few milliseconds, at most a tenth
+of the time limit); its makespan caps the horizons, and it is the schedule returned when time runs
+out.
+
 Statuses: ``optimal`` (makespan proved optimal; ``stats.tiles_traveled_optimal`` says whether
-the second objective was proved too), ``infeasible`` (no schedule within the horizon cap, or a
-static reason in ``stats.reason``), ``timeout`` (the makespan search did not finish; the lower
-bound says how far it got).
+the second objective was proved too), ``feasible`` (time ran out; the incumbent, with the lower
+bound the search reached), ``infeasible`` (no schedule within the horizon cap, or a static reason
+in ``stats.reason``), ``timeout`` (time ran out with no schedule; the lower bound says how far the
+search got).
 """
 from __future__ import annotations
 
@@ -26,8 +31,9 @@ from bille.instances import Instance, OptionError
 from bille.instances.rules import goal_violation
 
 from .bounds import lower_bound
+from .metrics import metrics
 from .result import Result
-from .schedule import Schedule
+from .schedule import Schedule, bind
 
 SAT, UNSAT, UNKNOWN = "sat", "unsat", "unknown"
 
@@ -86,6 +92,7 @@ class _Search:
         self.deadline = None if time_limit is None else self.start + time_limit
         self.options = Options(prune_reach=prune, prune_cells=prune, connectivity=connectivity)
         self.minimize_travel = minimize_travel
+        self.incumbent: np.ndarray | None = None
         self.bounds = lower_bound(instance)
         self.cap = default_cap(self.bounds.lower) if max_makespan is None else max_makespan
         if self.cap < self.bounds.lower:
@@ -96,6 +103,28 @@ class _Search:
 
     def left(self) -> float | None:
         return None if self.deadline is None else self.deadline - time.perf_counter()
+
+    def timeout(self, lower: int) -> Result:
+        """Time is up at horizon ``lower``: the incumbent if there is one, else no schedule."""
+        if self.incumbent is not None:
+            return self.result("feasible", self.incumbent, lower=lower)
+        return self.result("timeout", lower=lower)
+
+    def _find_incumbent(self) -> None:
+        """A first schedule from Temporal A* (path planning only); its makespan caps the search."""
+        if self.instance.is_reconfiguration:
+            return
+        from bille.heuristics.temporal_astar import plan
+
+        budget = 5.0 if self.deadline is None else min(5.0, 0.1 * (self.deadline - time.perf_counter()))
+        found = plan(self.instance, time_limit=max(budget, 0.01))
+        if found.schedule is None:
+            return
+        ids = bind(self.instance, found.schedule)
+        makespan = metrics(self.instance, ids).makespan
+        if makespan <= self.cap:
+            self.incumbent, self.cap = ids[:, :makespan], makespan
+            self.stats["incumbent"] = {"method": "temporal-astar", "makespan": makespan}
 
     def result(self, status, ids=None, lower=None) -> Result:
         schedule = None if ids is None else Schedule.from_ids(self.instance, ids, meta={"method": self.method})
@@ -110,6 +139,7 @@ class _Search:
         if goal_violation(inst.world, inst.start_state, inst.goal_tiles, inst.goal_cells, 0) is None:
             self.stats["tiles_traveled_optimal"] = True
             return self.result("optimal", np.zeros((inst.num_robots, 0), dtype=np.int64), lower=0)
+        self._find_incumbent()
         return self._cpsat() if self.method == "cpsat" else self._sat()
 
     # ---- lazy connectivity ------------------------------------------------------------------
@@ -131,7 +161,7 @@ class _Search:
                 backend = CpSatBackend(model, self.kw["threads"], self.kw["seed"], deadline=self.deadline,
                                        presolve=self.kw["presolve"])
             except OutOfTime:
-                return self.result("timeout", lower=T)
+                return self.timeout(T)
             self.stats["horizons"].append({"T": T, **model.size()})
             began = time.perf_counter()
             while True:
@@ -140,7 +170,7 @@ class _Search:
                     break
             self.stats["horizons"][-1].update(answer=status, time_s=round(time.perf_counter() - began, 3))
             if status == UNKNOWN:
-                return self.result("timeout", lower=T)
+                return self.timeout(T)
             if status == SAT:
                 ids = decode(model, self.instance, backend.value)
                 ids = self._cpsat_travel(backend, model, ids)
@@ -172,7 +202,7 @@ class _Search:
             try:
                 model = build(self.instance, T, self.options, min_done=k, deadline=self.deadline)
             except OutOfTime:
-                return self.result("timeout", lower=k)
+                return self.timeout(k)
             backend = SatBackend(model, self.kw["solver"])
             try:
                 while k <= T:
@@ -182,7 +212,7 @@ class _Search:
                                                    "clauses": backend.num_clauses, "answer": status,
                                                    "time_s": round(time.perf_counter() - began, 3)})
                     if status == UNKNOWN:
-                        return self.result("timeout", lower=k)
+                        return self.timeout(k)
                     if status == SAT:
                         ids = decode(model, self.instance, backend.value)[:, :k]
                         ids = self._sat_travel(backend, model, k, ids)

@@ -101,6 +101,18 @@ def test_a_timeout_returns_the_bound_not_a_crash(method):
 
 
 @pytest.mark.parametrize("method", ["cpsat", "sat"])
+def test_a_timeout_on_path_planning_returns_the_incumbent(method):
+    inst = load_instance(bundled_path("compare-5"))  # about 11 s to the optimum with CP-SAT
+    result = solve(inst, method, time_limit=1.5)
+    assert result.status in ("feasible", "optimal")
+    assert validate(inst, result.schedule).valid
+    assert result.stats["incumbent"]["method"] == "temporal-astar"
+    assert lower_bound(inst).lower <= result.lower_bound <= result.metrics.makespan
+    if result.status == "feasible":
+        assert result.metrics.makespan == result.stats["incumbent"]["makespan"]
+
+
+@pytest.mark.parametrize("method", ["cpsat", "sat"])
 def test_bad_options_are_rejected(method):
     inst = TINY["point-walk"]()
     with pytest.raises(OptionError, match="below the makespan lower bound"):
