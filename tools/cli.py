@@ -325,6 +325,15 @@ def _record(traces, path, *, spawn: bool = False, quiet: bool = False) -> None:
         click.echo(f"recording written to {path} (steps 0..{info['frames'] - 1}, {info['bytes'] / 1e3:.0f} kB)")
 
 
+def _register_gen() -> None:
+    from .gen import gen
+
+    cli.add_command(gen)
+
+
+_register_gen()
+
+
 @cli.group()
 def bench() -> None:
     """Benchmarks: figures measured on this machine, with ratios to baselines of the same run."""

@@ -1,0 +1,122 @@
+"""MovingAI grid benchmarks (Sturtevant 2012) as path-planning instances: ``bille gen movingai``.
+
+A ``.map`` file (``type octile``, ``height H``, ``width W``, ``map``, then H rows) becomes a grid
+whose passable cells (``.``, ``G``, ``S``) are tiles and whose other cells (``@``, ``O``, ``T``,
+``W``) are obstacles; only the largest 4-connected part of the passable cells stays tiles (the
+structure must be connected), the rest become empty cells. Robots use the ``point`` footprint,
+so the instance is classic MAPF on a 4-connected grid. Agents come from a ``.scen`` file (its
+rows in order, skipping those whose start or goal is outside the kept part or already used) or,
+without one, are drawn at random with the seed.
+"""
+from __future__ import annotations
+
+import random
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InstanceError
+from ..grid import Grid, components
+from ..instance import Instance, Robot, check_instance
+from ..moveset import load_moveset
+
+PASSABLE = set(".GS")
+BLOCKED = set("@OTW")
+
+
+def read_map(path: str | Path) -> tuple[int, int, np.ndarray]:
+    """``(width, height, passable)`` of a ``.map`` file (``passable`` a flat boolean mask)."""
+    lines = _lines(path)
+    head: dict[str, str] = {}
+    k = 0
+    while k < len(lines) and lines[k].strip() != "map":
+        key, _, value = lines[k].strip().partition(" ")
+        head[key] = value.strip()
+        k += 1
+    if k == len(lines):
+        raise InstanceError(f"{path}: no 'map' line (expected a MovingAI map: type, height, width, map)")
+    try:
+        height, width = int(head["height"]), int(head["width"])
+    except (KeyError, ValueError):
+        raise InstanceError(f"{path}: expected 'height H' and 'width W' lines before 'map'") from None
+    rows = lines[k + 1 : k + 1 + height]
+    if len(rows) != height:
+        raise InstanceError(f"{path}: {len(rows)} map rows, expected height {height}")
+    passable = np.zeros(width * height, dtype=bool)
+    for y, row in enumerate(rows):
+        row = row.rstrip("\r\n")
+        if len(row) != width:
+            raise InstanceError(f"{path}:{k + 2 + y}: row {y} has {len(row)} cells, expected width {width}")
+        for x, ch in enumerate(row):
+            if ch in PASSABLE:
+                passable[y * width + x] = True
+            elif ch not in BLOCKED:
+                raise InstanceError(f"{path}:{k + 2 + y}: column {x + 1}: unknown map character {ch!r} "
+                                    f"(expected one of {''.join(sorted(PASSABLE | BLOCKED))})")
+    return width, height, passable
+
+
+def read_scen(path: str | Path) -> list[tuple[tuple[int, int], tuple[int, int]]]:
+    """The ``(start, goal)`` cells of a ``.scen`` file's rows, in order."""
+    out = []
+    for k, line in enumerate(_lines(path), start=1):
+        parts = line.split("\t") if "\t" in line else line.split()
+        if k == 1 and parts and parts[0] == "version":
+            continue
+        if not line.strip():
+            continue
+        if len(parts) < 8:
+            raise InstanceError(f"{path}:{k}: expected 9 fields (bucket, map, width, height, start x, start y, "
+                                f"goal x, goal y, length), got {len(parts)}")
+        try:
+            sx, sy, gx, gy = (int(v) for v in parts[4:8])
+        except ValueError:
+            raise InstanceError(f"{path}:{k}: start and goal coordinates must be integers") from None
+        out.append(((sx, sy), (gx, gy)))
+    return out
+
+
+def from_movingai(map_path: str | Path, scen_path: str | Path | None = None, *, agents: int,
+                  seed: int = 0, name: str | None = None) -> Instance:
+    """An instance of ``agents`` point robots on the map (see the module docstring)."""
+    if agents < 1:
+        raise InstanceError(f"--agents must be at least 1, got {agents}")
+    width, height, passable = read_map(map_path)
+    labels, count = components(passable, width, height)
+    if count == 0:
+        raise InstanceError(f"{map_path}: no passable cell")
+    sizes = np.bincount(labels.ravel())[1:]
+    tiles = labels.ravel() == 1 + int(np.argmax(sizes))
+    inside = lambda xy: 0 <= xy[0] < width and 0 <= xy[1] < height and tiles[xy[1] * width + xy[0]]  # noqa: E731
+    pairs: list = []
+    if scen_path is not None:
+        used: set = set()
+        for s, g in read_scen(scen_path):
+            if inside(s) and inside(g) and s not in used and g not in used and len(pairs) < agents:
+                pairs.append((s, g))
+                used |= {s, g}
+        source = str(scen_path)
+    else:
+        rnd = random.Random(seed)
+        cells = [(c % width, c // width) for c in np.flatnonzero(tiles).tolist()]
+        if 2 * agents <= len(cells):
+            chosen = rnd.sample(cells, 2 * agents)
+            pairs = list(zip(chosen[:agents], chosen[agents:]))
+        source = f"random, seed {seed}"
+    if len(pairs) < agents:
+        raise InstanceError(f"{map_path}: only {len(pairs)} agents with distinct start and goal cells in the "
+                            f"largest connected part ({int(tiles.sum())} cells; {source}), {agents} asked")
+    grid = Grid.from_masks(width, height, ~passable, tiles)
+    inst = Instance(name or Path(map_path).stem, load_moveset("point"), grid, tuple(Robot(s) for s, _ in pairs),
+                    robot_goals=tuple(g for _, g in pairs),
+                    meta={"generator": "movingai", "map": Path(map_path).name, "agents": source})
+    return check_instance(inst)
+
+
+def _lines(path) -> list[str]:
+    try:
+        return Path(path).read_text(encoding="utf-8").splitlines()
+    except OSError as exc:
+        raise InstanceError(f"{path}: cannot read ({exc.strerror})") from None
+    except UnicodeDecodeError:
+        raise InstanceError(f"{path}: not a text file") from None

@@ -1,0 +1,165 @@
+"""Generators: valid, deterministic instances; exact Hamiltonian-path decisions."""
+from __future__ import annotations
+
+import itertools
+import random
+
+import networkx as nx
+import numpy as np
+import pytest
+
+from bille.instances import InstanceError, dump_instance, instance_from_text, is_connected
+from bille.instances.generators.graphs import (grid_graph, hamiltonian_path, parse_graph, random_grid_graph)
+from bille.instances.generators.movingai import from_movingai
+from bille.instances.generators.random import corridor, crowded, random_reconfiguration
+from bille.solvers import solve, validate
+from bille.tools.cli import main
+
+GENERATORS = {
+    "random": lambda seed: random_reconfiguration(10, 8, 30, 2, 3, seed=seed, tasks=True),
+    "random-point": lambda seed: random_reconfiguration(7, 7, 20, 3, 4, seed=seed, moveset="point"),
+    "crowded": lambda seed: crowded(6, 4, 3, seed=seed),
+    "crowded-S5": lambda seed: crowded(7, 5, 4, seed=seed, moveset="S5"),
+    "corridor": lambda seed: corridor(6, 2, seed=seed),
+    "corridor-moved": lambda seed: corridor(5, 3, room=4, moved=3, seed=seed),
+}
+
+
+@pytest.mark.parametrize("kind", GENERATORS)
+@pytest.mark.parametrize("seed", [0, 1, 7])
+def test_generated_instances_load_valid_and_are_deterministic(kind, seed):
+    text = dump_instance(GENERATORS[kind](seed))
+    assert dump_instance(GENERATORS[kind](seed)) == text
+    inst = instance_from_text(text)  # loading checks every validity rule
+    assert dump_instance(inst) == text
+
+
+@pytest.mark.parametrize("kind", GENERATORS)
+def test_seeds_differ(kind):
+    assert len({dump_instance(GENERATORS[kind](seed)) for seed in range(4)}) > 1
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_random_reconfiguration_moves_exactly_and_its_tasks_keep_the_tiles_connected(seed):
+    inst = random_reconfiguration(9, 9, 28, 2, 5, seed=seed, tasks=True)
+    start, goal = inst.start.tiles, inst.goal_tiles
+    assert int((start & ~goal).sum()) == int((goal & ~start).sum()) == 5
+    tiles = start.copy()
+    w = inst.width
+    for task in inst.tasks:
+        pick, place = task.pick[1] * w + task.pick[0], task.place[1] * w + task.place[0]
+        assert tiles[pick] and not tiles[place]
+        tiles[pick] = False
+        assert is_connected(tiles, w, inst.height)
+        tiles[place] = True
+        assert is_connected(tiles, w, inst.height)
+    assert np.array_equal(tiles, goal)
+
+
+def test_crowded_goals_are_other_robots_starts():
+    inst = crowded(6, 5, 4, seed=3)
+    assert [g for g in inst.robot_goals] == [inst.robots[(i + 1) % 4].front for i in range(4)]
+
+
+def test_corridor_is_one_tile_wide_between_the_rooms():
+    inst = corridor(7, 2, room=3)
+    t = inst.start.tiles.reshape(inst.height, inst.width)
+    hall = t[:, 4 : 4 + 7]
+    assert (hall.sum(axis=0) == 1).all()
+    result = solve(inst, "mstar", time_limit=60)  # Temporal A* deadlocks head on here, as the paper warns
+    assert result.schedule is not None and validate(inst, result.schedule).valid
+
+
+def test_a_generated_reconfiguration_is_solved_exactly():
+    inst = random_reconfiguration(6, 5, 10, 1, 1, seed=2)
+    for method in ("cpsat", "sat"):
+        result = solve(inst, method, time_limit=120)
+        assert result.status == "optimal" and validate(inst, result.schedule).valid
+    assert solve(inst, "cpsat").metrics.makespan == solve(inst, "bfs", time_limit=120).metrics.makespan
+
+
+# ---- grid graphs ------------------------------------------------------------------------------
+
+def _brute_force(g: nx.Graph) -> bool:
+    return any(all(g.has_edge(a, b) for a, b in zip(p, p[1:])) for p in itertools.permutations(g.nodes))
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_hamiltonian_path_agrees_with_brute_force(seed):
+    g = random_grid_graph(random.Random(seed).randint(2, 7), seed)
+    path = hamiltonian_path(g)
+    assert (path is not None) == _brute_force(g)
+    if path is not None:
+        assert sorted(path) == sorted(g.nodes) and all(g.has_edge(a, b) for a, b in zip(path, path[1:]))
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_hamiltonian_path_from_a_given_start(seed):
+    g = random_grid_graph(6, seed)
+    for v in g.nodes:
+        path = hamiltonian_path(g, start=v)
+        expected = any(p[0] == v and all(g.has_edge(a, b) for a, b in zip(p, p[1:]))
+                       for p in itertools.permutations(g.nodes))
+        assert (path is not None) == expected and (path is None or path[0] == v)
+
+
+def test_graph_files_in_both_forms():
+    drawn = parse_graph("# a T\nooo\n.o.\n")
+    listed = parse_graph("0 0\n1 0\n2 0\n1 1\n")
+    assert nx.utils.graphs_equal(drawn, listed)
+    assert hamiltonian_path(drawn) is None
+    assert hamiltonian_path(grid_graph([(x, y) for x in range(3) for y in range(3)])) is not None
+    with pytest.raises(InstanceError, match=r"<graph>:2: column 2: unexpected 'x'"):
+        parse_graph("oo\nox\n")
+
+
+# ---- MovingAI -----------------------------------------------------------------------------------
+
+MAP = "type octile\nheight 4\nwidth 6\nmap\n..@...\n..@.T.\n......\n@@....\n"
+SCEN = "version 1\n0\tm.map\t6\t4\t0\t0\t5\t3\t8\n0\tm.map\t6\t4\t5\t0\t0\t2\t7\n0\tm.map\t6\t4\t4\t1\t1\t2\t2\n"
+
+
+def test_movingai_map_and_scenario(tmp_path):
+    (tmp_path / "m.map").write_text(MAP)
+    (tmp_path / "m.scen").write_text(SCEN)
+    inst = from_movingai(tmp_path / "m.map", tmp_path / "m.scen", agents=2)
+    assert [r.front for r in inst.robots] == [(0, 0), (5, 0)]
+    assert inst.robot_goals == ((5, 3), (0, 2))
+    assert inst.moveset.name == "point" and int(inst.start.obstacles.sum()) == 5
+    result = solve(inst, "cpsat", time_limit=60)
+    assert result.status == "optimal" and validate(inst, result.schedule).valid
+    with pytest.raises(InstanceError, match="only 2 agents"):
+        from_movingai(tmp_path / "m.map", tmp_path / "m.scen", agents=3)  # the third row starts on a 'T'
+
+
+# ---- the command line ---------------------------------------------------------------------------
+
+def _run(argv):
+    with pytest.raises(SystemExit) as exc:
+        main(argv)
+    return exc.value.code
+
+
+def test_gen_writes_a_loadable_instance(tmp_path, capsys):
+    out = tmp_path / "r.yaml"
+    assert _run(["gen", "random", "--seed", "5", "--tasks", "-o", str(out)]) == 0
+    assert dump_instance(instance_from_text(out.read_text())) == out.read_text()
+    capsys.readouterr()
+    assert _run(["gen", "corridor", "--moved", "2", "--json"]) == 0
+    assert '"moved": 2' in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["gen", "graph", "{tmp}/bad.graph"], "unexpected 'x'"),
+    (["gen", "graph", "{tmp}/split.graph"], "not connected"),
+    (["gen", "random", "--tiles", "10", "--moved", "9"], "cannot move 9 tiles"),
+    (["gen", "random", "--tiles", "100", "--width", "5", "--height", "5"], "do not fit"),
+    (["gen", "movingai", "{tmp}/m.map", "--agents", "40"], "40 asked"),
+])
+def test_bad_generator_input_is_one_line_and_exit_2(tmp_path, capsys, argv, message):
+    (tmp_path / "bad.graph").write_text("oxo\n")
+    (tmp_path / "split.graph").write_text("o.o\n")
+    (tmp_path / "m.map").write_text(MAP)
+    assert _run([a.replace("{tmp}", str(tmp_path)) for a in argv]) == 2
+    err = capsys.readouterr().err
+    assert message in err and len(err.strip().splitlines()) == 1

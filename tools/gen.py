@@ -1,0 +1,135 @@
+"""``bille gen``: generators on the command line; each writes one instance file (or prints it)."""
+from __future__ import annotations
+
+import json
+
+import click
+
+from bille.instances import InstanceError, dump_instance, save_instance
+
+EXIT_OK = 0
+
+
+def _output(inst, output: str | None, as_json: bool) -> int:
+    if output:
+        save_instance(inst, output)
+    if as_json:
+        click.echo(json.dumps(summary(inst, output)))
+    elif output:
+        click.echo(f"{inst.name}: written to {output}")
+    else:
+        click.echo(dump_instance(inst), nl=False)
+    return EXIT_OK
+
+
+def summary(inst, path: str | None = None) -> dict:
+    """The instance's sizes, as ``--json`` prints them."""
+    moved = int((inst.start.tiles != inst.goal_tiles).sum()) // 2
+    return {"name": inst.name, "path": path, "width": inst.width, "height": inst.height,
+            "moveset": inst.moveset.name, "robots": inst.num_robots, "tiles": int(inst.start.tiles.sum()),
+            "moved": moved, "tasks": None if inst.tasks is None else len(inst.tasks),
+            "kind": "reconfiguration" if inst.is_reconfiguration else "path planning", "meta": inst.meta}
+
+
+def common(f):
+    f = click.option("--json", "as_json", is_flag=True, help="Print the instance's summary as one JSON object.")(f)
+    f = click.option("-o", "--output", type=click.Path(dir_okay=False), help="Write the instance here (default: print it).")(f)
+    f = click.option("--seed", type=int, default=0, show_default=True)(f)
+    return f
+
+
+@click.group("gen")
+def gen() -> None:
+    """Generate instances: random and paper-style maps, MovingAI imports, grid graphs."""
+
+
+@gen.command("random")
+@click.option("--width", type=click.IntRange(min=1), default=10, show_default=True)
+@click.option("--height", type=click.IntRange(min=1), default=8, show_default=True)
+@click.option("--tiles", type=click.IntRange(min=1), default=30, show_default=True)
+@click.option("--robots", type=click.IntRange(min=0), default=2, show_default=True)
+@click.option("--moved", type=click.IntRange(min=0), default=3, show_default=True, help="Tiles the goal moves.")
+@click.option("--moveset", default="S7", show_default=True)
+@click.option("--tasks", is_flag=True, help="Add the task list: a sequence that keeps the tiles connected.")
+@common
+def gen_random(width, height, tiles, robots, moved, moveset, tasks, seed, output, as_json) -> int:
+    """A random connected structure, robots on it, a goal that moves some tiles."""
+    from bille.instances.generators.random import random_reconfiguration
+
+    return _output(random_reconfiguration(width, height, tiles, robots, moved, seed=seed, moveset=moveset,
+                                          tasks=tasks), output, as_json)
+
+
+@gen.command("crowded")
+@click.option("--width", type=click.IntRange(min=1), default=6, show_default=True)
+@click.option("--height", type=click.IntRange(min=1), default=4, show_default=True)
+@click.option("--robots", type=click.IntRange(min=2), default=3, show_default=True)
+@click.option("--holes", type=float, default=0.1, show_default=True, help="Fraction of the block left without tiles.")
+@click.option("--moveset", default="S7", show_default=True)
+@common
+def gen_crowded(width, height, robots, holes, moveset, seed, output, as_json) -> int:
+    """Robots packed on a small structure, each with another robot's start as its goal."""
+    from bille.instances.generators.random import crowded
+
+    return _output(crowded(width, height, robots, holes=holes, seed=seed, moveset=moveset), output, as_json)
+
+
+@gen.command("corridor")
+@click.option("--length", type=click.IntRange(min=1), default=6, show_default=True, help="Corridor tiles.")
+@click.option("--robots", type=click.IntRange(min=1), default=2, show_default=True)
+@click.option("--room", type=click.IntRange(min=2), default=3, show_default=True, help="Side of each room.")
+@click.option("--moved", type=click.IntRange(min=0), default=0, show_default=True,
+              help="Tiles to carry from the left room to the right (0: robots swap rooms instead).")
+@click.option("--moveset", default="S7", show_default=True)
+@common
+def gen_corridor(length, robots, room, moved, moveset, seed, output, as_json) -> int:
+    """Two rooms joined by a one-tile-wide corridor where robots meet head on."""
+    from bille.instances.generators.random import corridor
+
+    return _output(corridor(length, robots, room=room, moved=moved, seed=seed, moveset=moveset), output, as_json)
+
+
+@gen.command("movingai")
+@click.argument("map_file", metavar="MAP")
+@click.argument("scen", required=False)
+@click.option("--agents", "-k", type=int, required=True, help="Number of robots.")
+@common
+def gen_movingai(map_file, scen, agents, seed, output, as_json) -> int:
+    """A MovingAI .map (+ .scen) as point robots on an all-tile structure."""
+    from bille.instances.generators.movingai import from_movingai
+
+    return _output(from_movingai(map_file, scen, agents=agents, seed=seed), output, as_json)
+
+
+@gen.command("graph")
+@click.argument("graph_file", metavar="GRAPH", required=False)
+@click.option("--vertices", type=int, help="Generate a random connected grid graph of this many vertices.")
+@click.option("--seed", type=int, default=0, show_default=True)
+@click.option("-o", "--output", type=click.Path(dir_okay=False), help="Write the graph drawing here.")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object.")
+def gen_graph(graph_file, vertices, seed, output, as_json) -> int:
+    """Read GRAPH (a drawing with 'o' or lines 'x y') or make a random grid graph, and decide
+    whether it has a Hamiltonian path."""
+    import networkx as nx
+
+    from bille.instances.generators.graphs import draw_graph, hamiltonian_path, load_graph, random_grid_graph
+    from bille.instances.instance import write_atomic
+
+    if (graph_file is None) == (vertices is None):
+        raise click.UsageError("give a GRAPH file or --vertices N (not both)")
+    g = load_graph(graph_file) if graph_file else random_grid_graph(vertices, seed)
+    if not nx.is_connected(g):
+        raise InstanceError(f"{graph_file}: the graph is not connected ({nx.number_connected_components(g)} parts)")
+    path = hamiltonian_path(g)
+    drawing = draw_graph(g)
+    if output:
+        write_atomic(output, drawing, InstanceError)
+    if as_json:
+        click.echo(json.dumps({"vertices": g.number_of_nodes(), "edges": g.number_of_edges(),
+                               "hamiltonian_path": None if path is None else [list(v) for v in path],
+                               "path": output}))
+        return EXIT_OK
+    click.echo(drawing, nl=False)
+    click.echo(f"{g.number_of_nodes()} vertices, {g.number_of_edges()} edges; Hamiltonian path: "
+               + ("none" if path is None else " ".join(f"({x},{y})" for x, y in path)))
+    return EXIT_OK
