@@ -125,6 +125,7 @@ class _Search:
         if makespan <= self.cap:
             self.incumbent, self.cap = ids[:, :makespan], makespan
             self.stats["incumbent"] = {"method": "temporal-astar", "makespan": makespan}
+            self.stats["horizon_cap"] = makespan
 
     def result(self, status, ids=None, lower=None) -> Result:
         schedule = None if ids is None else Schedule.from_ids(self.instance, ids, meta={"method": self.method})

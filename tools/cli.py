@@ -213,6 +213,7 @@ def gap(instances, methods: str, time_limit: float, threads: int, csv_path: str,
         click.echo(f"written to {csv_path}")
     return EXIT_OK
 
+
 @cli.command()
 @click.argument("instance")
 @click.argument("schedules", nargs=-1)
