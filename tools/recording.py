@@ -87,7 +87,6 @@ def record(traces: Sequence[Trace], path: str | Path | None = None, *, spawn: bo
             except Exception as exc:  # the viewer binary may be missing or fail to start
                 viewer = f"the viewer could not be started ({exc})"
     tmp = None
-    sinks = []
     if path is not None:
         path = Path(path)
         tmp = path.with_name(f".{path.name}.tmp")
@@ -95,12 +94,12 @@ def record(traces: Sequence[Trace], path: str | Path | None = None, *, spawn: bo
             tmp.touch()
         except OSError as exc:
             raise BilleError(f"{path}: cannot write ({exc.strerror})") from None
-        sinks.append(rr.FileSink(str(tmp)))
-    if spawn and viewer is None:
-        sinks.append(rr.GrpcSink())
-    if not sinks:
+    elif not spawn or viewer is not None:
         return {"path": None, "bytes": 0, "frames": max((t.steps for t in traces), default=0) + 1, "viewer": viewer}
     try:
+        sinks = [rr.FileSink(str(tmp))] if tmp is not None else []
+        if spawn and viewer is None:
+            sinks.append(rr.GrpcSink())
         rec.set_sinks(*sinks, default_blueprint=blueprint)
         for t in traces:
             _log_trace(rec, t)
