@@ -15,7 +15,7 @@ import time
 
 from bille.instances import Instance, OptionError
 
-from .joint import OBJECTIVE, JointProblem, makespan_bound, to_result
+from .joint import OBJECTIVE, JointProblem, makespan_bound, to_result, unwind
 
 
 def plan(instance: Instance, *, epsilon: float = 1.0, time_limit: float | None = None,
@@ -57,7 +57,7 @@ def plan(instance: Instance, *, epsilon: float = 1.0, time_limit: float | None =
         if problem.is_goal(poses):
             stats["sum_of_costs"] = g_soc
             status = "optimal" if epsilon == 1 else "feasible"
-            return to_result(instance, "astar", status, _unwind(parent, key), lower_bound=bound, stats=stats)
+            return to_result(instance, "astar", status, unwind(parent, key), lower_bound=bound, stats=stats)
         stats["expanded"] += 1
         if stats["expanded"] > max_expansions or (deadline is not None and time.perf_counter() > deadline):
             return to_result(instance, "astar", "timeout", None, lower_bound=bound, stats=stats)
@@ -74,11 +74,3 @@ def plan(instance: Instance, *, epsilon: float = 1.0, time_limit: float | None =
             stats["generated"] += 1
             heapq.heappush(frontier, (g[0] + epsilon * h[0], g[1] + h[1], next(counter), child))
     return to_result(instance, "astar", "infeasible", None, lower_bound=None, stats=stats)
-
-
-def _unwind(parent: dict, key) -> list:
-    steps = []
-    while parent[key] is not None:
-        key, actions = parent[key]
-        steps.append(actions)
-    return steps[::-1]

@@ -140,3 +140,13 @@ def to_result(instance: Instance, method: str, status: str, steps: list | None, 
 def makespan_bound(problem: JointProblem) -> int:
     """No schedule is shorter than the farthest robot's distance to its goal."""
     return problem.h(problem.start)[1]
+
+
+def unwind(parent: dict, key) -> list:
+    """The joint actions from the root to ``key`` in a search tree stored as
+    ``parent[key] = (parent key, joint action)`` (None at the root)."""
+    steps = []
+    while parent[key] is not None:
+        key, actions = parent[key]
+        steps.append(actions)
+    return steps[::-1]

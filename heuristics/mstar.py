@@ -28,7 +28,7 @@ import time
 
 from bille.instances import Instance, OptionError
 
-from .joint import OBJECTIVE, JointProblem, makespan_bound, to_result
+from .joint import OBJECTIVE, JointProblem, makespan_bound, to_result, unwind
 
 INF = (1 << 60, 0)
 
@@ -122,7 +122,7 @@ class _MStar:
             if problem.is_goal(node[0]):
                 stats["sum_of_costs"] = self.g[node][0]
                 status = "optimal" if self.epsilon == 1 else "feasible"
-                return to_result(instance, "mstar", status, _unwind(self.parent, node), lower_bound=bound, stats=stats)
+                return to_result(instance, "mstar", status, unwind(self.parent, node), lower_bound=bound, stats=stats)
             stats["expanded"] += 1
             if stats["expanded"] > self.max_expansions or (self.deadline is not None and time.perf_counter() > self.deadline):
                 return to_result(instance, "mstar", "timeout", None, lower_bound=bound, stats=stats)
@@ -239,11 +239,3 @@ def _colliding(options: list[list], coupled: frozenset) -> frozenset:
         if any(not a[2].isdisjoint(b[2]) for a in options[i] for b in options[j]):
             hit.update((i, j))
     return frozenset(hit)
-
-
-def _unwind(parent: dict, key) -> list:
-    steps = []
-    while parent[key] is not None:
-        key, actions = parent[key]
-        steps.append(actions)
-    return steps[::-1]

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InstanceError
-from ..grid import Grid, components
+from ..grid import Grid, detached_cells
 from ..instance import Instance, Robot, check_instance
 from ..moveset import load_moveset
 
@@ -82,11 +82,10 @@ def from_movingai(map_path: str | Path, scen_path: str | Path | None = None, *, 
     if agents < 1:
         raise InstanceError(f"--agents must be at least 1, got {agents}")
     width, height, passable = read_map(map_path)
-    labels, count = components(passable, width, height)
-    if count == 0:
+    if not passable.any():
         raise InstanceError(f"{map_path}: no passable cell")
-    sizes = np.bincount(labels.ravel())[1:]
-    tiles = labels.ravel() == 1 + int(np.argmax(sizes))
+    tiles = passable.copy()
+    tiles[detached_cells(passable, width, height)] = False  # keep the largest connected part
     inside = lambda xy: 0 <= xy[0] < width and 0 <= xy[1] < height and tiles[xy[1] * width + xy[0]]  # noqa: E731
     pairs: list = []
     if scen_path is not None:
