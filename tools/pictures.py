@@ -25,6 +25,7 @@ from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.patches import Circle, Patch, Rectangle  # noqa: E402
 
 from bille.instances import BilleError, OptionError  # noqa: E402
+from bille.instances.instance import write_with  # noqa: E402
 
 from . import style  # noqa: E402
 from .trace import Trace  # noqa: E402
@@ -231,7 +232,7 @@ def save_png(traces: Sequence[Trace], path: str | Path, frames: str | None = Non
     painter = Painter(traces, len(traces), len(chosen), cell)
     try:
         painter.draw([(r, c, tr, min(f, tr.steps)) for r, tr in enumerate(traces) for c, f in enumerate(chosen)])
-        _write(path, lambda tmp: painter.fig.savefig(tmp, dpi=DPI, format="png"))
+        write_with(path, lambda tmp: painter.fig.savefig(tmp, dpi=DPI, format="png"), BilleError)
         return painter.layout
     finally:
         painter.close()
@@ -254,22 +255,8 @@ def save_gif(traces: Sequence[Trace], path: str | Path, fps: float = 4.0, cell: 
                 progress(f + 1, steps + 1)
         duration = [int(1000 / fps)] * len(images)
         duration[-1] = max(duration[-1], 1500)  # rest on the final state
-        _write(path, lambda tmp: images[0].save(tmp, format="GIF", save_all=True, append_images=images[1:],
-                                                duration=duration, loop=0))
+        write_with(path, lambda tmp: images[0].save(tmp, format="GIF", save_all=True, append_images=images[1:],
+                                                    duration=duration, loop=0), BilleError)
         return painter.layout
     finally:
         painter.close()
-
-
-def _write(path: str | Path, write) -> None:
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.tmp")
-    try:
-        write(tmp)
-        tmp.replace(path)
-    except OSError as exc:
-        tmp.unlink(missing_ok=True)
-        raise BilleError(f"{path}: cannot write ({exc.strerror})") from None
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise

@@ -15,6 +15,7 @@ import numpy as np
 
 from bille.instances import Instance, Kind, State, Violation
 from bille.instances.rules import goal_violation, run
+from bille.solvers.metrics import action_kinds
 from bille.solvers.schedule import Schedule, bind
 
 XY = tuple[int, int]
@@ -95,10 +96,9 @@ def trace(instance: Instance, schedule: Schedule | None = None, label: str = "sc
     movesets = instance.movesets
     poses = np.array([s.poses for s in states], dtype=np.int64).reshape(len(states), m)
     feet = np.zeros((len(states), m, 2), dtype=np.int64)  # cells
-    kinds = np.zeros((m, done), dtype=np.int8)
+    kinds = action_kinds(instance, ids[:, :done])
     for i, g in enumerate(world.graphs):
         feet[:, i] = g.feet[poses[:, i]]
-        kinds[i] = g.kind[ids[i, :done]]
     w = instance.width
     front = np.stack([feet[..., 0] % w, feet[..., 0] // w], axis=-1)
     back = np.stack([feet[..., 1] % w, feet[..., 1] // w], axis=-1)
