@@ -31,13 +31,18 @@ class JointProblem:
     walks: list[Walk]
     goals: tuple[int, ...]  # front-foot goal cell per robot, -1 = anywhere
     dists: list[np.ndarray]  # per robot: steps from each pose to its goal (0 everywhere if none)
+    starts: tuple[int, ...] | None = None  # start poses (default: the instance's)
+    homes: list[np.ndarray] | None = None  # per robot: goal poses (default: front foot on the goal)
 
     def __post_init__(self) -> None:
         # plain lists for the inner loops (indexing numpy per call costs more than the search):
-        # dist_lists[i][p] = dists[i][p]; home_lists[i][p]: pose p has robot i's front on its goal
+        # dist_lists[i][p] = dists[i][p]; home_lists[i][p]: pose p is one of robot i's goal poses
         self.dist_lists = [d.tolist() for d in self.dists]
-        self.home_lists = [[True] * w.succ.shape[0] if c < 0 else (w.graph.feet[:, 0] == c).tolist()
-                           for w, c in zip(self.walks, self.goals)]
+        if self.homes is not None:
+            self.home_lists = [h.tolist() for h in self.homes]
+        else:
+            self.home_lists = [[True] * w.succ.shape[0] if c < 0 else (w.graph.feet[:, 0] == c).tolist()
+                               for w, c in zip(self.walks, self.goals)]
 
     @classmethod
     def of(cls, instance: Instance) -> "JointProblem":
@@ -48,9 +53,19 @@ class JointProblem:
         dists = [w.distances(c) if c >= 0 else np.zeros(w.succ.shape[0], np.int32) for w, c in zip(walks, goals)]
         return cls(instance, walks, goals, dists)
 
+    @classmethod
+    def towards(cls, instance: Instance, walks: list[Walk], dists: list[np.ndarray | None],
+                starts: tuple[int, ...]) -> "JointProblem":
+        """Robots on ``walks`` from ``starts``, robot ``i`` bound for the poses where
+        ``dists[i]`` is 0 (None: no goal). The reconfiguration loop plans its steps with this."""
+        goals = tuple(-1 if d is None else 0 for d in dists)
+        full = [np.zeros(w.succ.shape[0], np.int32) if d is None else d for w, d in zip(walks, dists)]
+        homes = [np.ones(w.succ.shape[0], bool) if d is None else d == 0 for w, d in zip(walks, dists)]
+        return cls(instance, walks, goals, full, starts, homes)
+
     @property
     def start(self) -> Poses:
-        return tuple(self.instance.start_state.poses)
+        return tuple(self.instance.start_state.poses) if self.starts is None else tuple(self.starts)
 
     def unreachable(self) -> list[int]:
         """Robots that cannot reach their goal cell even alone."""
@@ -113,8 +128,8 @@ def require_path_planning(instance: Instance) -> None:
     """The walking planners plan on a structure that does not change."""
     if instance.is_reconfiguration:
         raise OptionError(
-            f"instance '{instance.name}' moves tiles; astar, mstar and temporal-astar plan robot paths "
-            "on a fixed structure (path-planning instances: no goal grid that differs, no carried tiles)")
+            f"instance '{instance.name}' moves tiles; astar plans robot paths on a fixed structure "
+            "(path-planning instances); use temporal-astar or mstar, which run the reconfiguration loop")
 
 
 def schedule_ids(instance: Instance, steps: list[tuple[int, ...]]) -> np.ndarray:

@@ -34,8 +34,10 @@ INF = (1 << 60, 0)
 
 
 def plan(instance: Instance, *, epsilon: float = 1.0, od: bool = True, time_limit: float | None = None,
-         max_expansions: int = 5_000_000):
-    """M*: minimum sum of costs (then makespan) on a fixed structure.
+         max_expansions: int = 5_000_000, load_transfer: bool = False, d_tr: int = 5, max_steps: int | None = None):
+    """M*: minimum sum of costs (then makespan) on a fixed structure; on an instance that moves
+    tiles, the motion layer of the reconfiguration loop (:mod:`.reconfigure`), which is not
+    optimal.
 
     Parameters
     ----------
@@ -43,19 +45,33 @@ def plan(instance: Instance, *, epsilon: float = 1.0, od: bool = True, time_limi
     od : expand coupled robots one at a time (operator decomposition).
     time_limit : seconds before giving up with status ``timeout``.
     max_expansions : expansions (of vertices and intermediate nodes) before ``timeout``.
+    load_transfer, d_tr, max_steps : reconfiguration only (see :func:`.reconfigure.plan`).
     """
     if epsilon < 1:
         raise OptionError(f"mstar: epsilon must be >= 1, got {epsilon}")
-    return _MStar(instance, epsilon, od, time_limit, max_expansions).run()
+    if instance.is_reconfiguration:
+        from .reconfigure import plan as reconfigure
+
+        return reconfigure(instance, motion="mstar", load_transfer=load_transfer, d_tr=d_tr, epsilon=epsilon,
+                           time_limit=time_limit, max_steps=max_steps)
+    return _MStar(JointProblem.of(instance), epsilon, od, time_limit, max_expansions).run()
+
+
+def joint_plan(problem: JointProblem, *, epsilon: float = 1.0, od: bool = True, time_limit: float | None = None,
+               max_expansions: int = 5_000_000) -> tuple[str, list | None, dict]:
+    """M* on any :class:`JointProblem`: ``(status, joint actions or None, stats)``."""
+    search = _MStar(problem, epsilon, od, time_limit, max_expansions)
+    status, steps = search.search()
+    return status, steps, search.stats
 
 
 class _MStar:
-    def __init__(self, instance, epsilon, od, time_limit, max_expansions):
-        self.instance, self.epsilon, self.od = instance, epsilon, od
+    def __init__(self, problem: JointProblem, epsilon, od, time_limit, max_expansions):
+        self.instance, self.epsilon, self.od = problem.instance, epsilon, od
         self.deadline = None if time_limit is None else time.perf_counter() + time_limit
         self.max_expansions = max_expansions
-        self.problem = JointProblem.of(instance)
-        self.policy = [_policy(self.problem, i) for i in range(instance.num_robots)]
+        self.problem = problem
+        self.policy = [_policy(self.problem, i) for i in range(len(problem.walks))]
         self.stats = {"objective": OBJECTIVE, "epsilon": epsilon, "od": od,
                       "expanded": 0, "generated": 0, "largest_collision_set": 0}
         self.g: dict = {}
@@ -107,7 +123,13 @@ class _MStar:
         if problem.unreachable():
             stats["unreachable"] = problem.unreachable()
             return to_result(instance, "mstar", "infeasible", None, lower_bound=None, stats=stats)
-        root = (problem.start, (0,) * instance.num_robots)
+        status, steps = self.search()
+        lower = None if status == "infeasible" else bound
+        return to_result(instance, "mstar", status, steps, lower_bound=lower, stats=stats)
+
+    def search(self) -> tuple[str, list | None]:
+        problem, stats = self.problem, self.stats
+        root = (problem.start, (0,) * len(problem.walks))
         self.g[root], self.parent[root], self.collision[root], self.back[root] = (0, 0), None, frozenset(), set()
         self.push_vertex(root)
         while self.frontier:
@@ -121,13 +143,12 @@ class _MStar:
             self.expanded_as[node] = state
             if problem.is_goal(node[0]):
                 stats["sum_of_costs"] = self.g[node][0]
-                status = "optimal" if self.epsilon == 1 else "feasible"
-                return to_result(instance, "mstar", status, unwind(self.parent, node), lower_bound=bound, stats=stats)
+                return ("optimal" if self.epsilon == 1 else "feasible"), unwind(self.parent, node)
             stats["expanded"] += 1
             if stats["expanded"] > self.max_expansions or (self.deadline is not None and time.perf_counter() > self.deadline):
-                return to_result(instance, "mstar", "timeout", None, lower_bound=bound, stats=stats)
+                return "timeout", None
             self.expand(node)
-        return to_result(instance, "mstar", "infeasible", None, lower_bound=None, stats=stats)
+        return "infeasible", None
 
     def expand(self, key):
         problem = self.problem
@@ -218,11 +239,11 @@ class _MStar:
 
 def _policy(problem: JointProblem, i: int):
     """Robot ``i``'s individually optimal move from a pose, as a one-element move list."""
-    walk, goal, cache = problem.walks[i], problem.goals[i], {}
+    walk, goal, dist, cache = problem.walks[i], problem.goals[i], problem.dists[i], {}
 
     def move(pose: int):
         if pose not in cache:
-            nxt = walk.policy(pose, goal) if goal >= 0 else pose
+            nxt = walk.towards(pose, dist) if goal >= 0 else pose
             cache[pose] = problem.moves(i, pose, only=nxt)
         return cache[pose]
 

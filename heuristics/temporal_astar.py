@@ -31,8 +31,9 @@ from .spacetime import window
 
 def plan(instance: Instance, *, epsilon: float = 1.0, horizon: int = 5, time_limit: float | None = None,
          max_steps: int | None = None, max_shifts: int | None = None, shift_priorities: bool = True,
-         priorities: list[int] | None = None):
-    """Temporal A* on a fixed structure.
+         priorities: list[int] | None = None, load_transfer: bool = False, d_tr: int = 5):
+    """Temporal A*: on a fixed structure, or as the motion layer of the reconfiguration loop
+    (:mod:`.reconfigure`) when the instance moves tiles.
 
     Parameters
     ----------
@@ -43,7 +44,17 @@ def plan(instance: Instance, *, epsilon: float = 1.0, horizon: int = 5, time_lim
     max_shifts : budget of priority shifts (default: 4 m^2 for m robots).
     shift_priorities : False keeps ``Q`` fixed (for comparison): a blocked robot then ends the run.
     priorities : the initial ``Q`` (default: robot ids in order).
+    load_transfer, d_tr : reconfiguration only: exchange loads between robots within Manhattan
+        distance ``d_tr`` (paper, equations (1)-(3)).
     """
+    if instance.is_reconfiguration:
+        if not shift_priorities:
+            raise OptionError("temporal-astar: shift_priorities=false is for path planning only")
+        from .reconfigure import plan as reconfigure
+
+        return reconfigure(instance, motion="temporal-astar", load_transfer=load_transfer, d_tr=d_tr,
+                           epsilon=epsilon, horizon=horizon, time_limit=time_limit, max_steps=max_steps,
+                           max_shifts=max_shifts, priorities=priorities)
     m = instance.num_robots
     if epsilon < 1:
         raise OptionError(f"temporal-astar: epsilon must be >= 1, got {epsilon}")

@@ -3,8 +3,11 @@
 The planners of the paper (Methods, "Graph representation") search the pose graph of a robot on
 the current structure: poses whose feet stand on tiles, joined by the moveset's walking actions
 (``wait`` and the motions; no pick or place). :class:`Walk` holds that graph for one compiled
-pose graph and one tile set, and the breadth-first distance tables to goal cells that the
-planners use as their admissible, consistent heuristic (cached per goal).
+pose graph, one tile set and one carrying flag (a carried tile adds its cells to every collision
+set and must not pass over an obstacle), and the breadth-first distance tables that the planners
+use as their admissible, consistent heuristic (cached per goal): to a front-foot goal cell, to
+the poses *facing* a cell (the poses from which a pick or place targets it), or to any set of
+poses the caller names.
 """
 from __future__ import annotations
 
@@ -27,19 +30,26 @@ class Walk:
     a walking action, leaves the workspace, or puts a foot off the tiles.
     """
 
-    def __init__(self, graph: PoseGraph, tiles: np.ndarray) -> None:
+    def __init__(self, graph: PoseGraph, tiles: np.ndarray, carrying: bool = False) -> None:
         self.graph = graph
         self.tiles = np.asarray(tiles, dtype=bool)
+        self.carrying = carrying
         walking = np.isin(graph.kind, (Kind.WAIT, Kind.MOTION))
         standing = graph.valid & self.tiles[np.maximum(graph.feet, 0)].all(axis=1)
         lands = self.tiles[np.maximum(graph.need, 0)].all(axis=2)
         ok = (graph.succ >= 0) & walking[None, :] & standing[:, None] & lands
+        if carrying:
+            ok &= graph.carry_ok
         self.succ = np.where(ok, graph.succ, -1).astype(np.int32)
         self.standing = standing
         self.wait = graph.wait
+        manipulating = np.isin(graph.kind, (Kind.PICK, Kind.PLACE))
+        self._targets = np.where(manipulating[None, :] & standing[:, None], graph.target, -1)
         self._moves: dict[int, list[tuple[int, int, frozenset]]] = {}
-        self._dist: OrderedDict[int, np.ndarray] = OrderedDict()
+        self._dist: OrderedDict = OrderedDict()
+        self._forward: OrderedDict[int, np.ndarray] = OrderedDict()
         self._reverse: csr_matrix | None = None
+        self._forward_graph: csr_matrix | None = None
 
     # ---- moves --------------------------------------------------------------------------------
 
@@ -50,10 +60,19 @@ class Walk:
         if out is None:
             g, row = self.graph, self.succ[pose]
             order = [self.wait] + [a for a in range(len(row)) if a != self.wait]
-            out = [(a, int(row[a]), frozenset(c for c in g.coll[pose, a].tolist() if c >= 0))
-                   for a in order if row[a] >= 0]
+            out = [(a, int(row[a]), self._cells(pose, a)) for a in order if row[a] >= 0]
             self._moves[pose] = out
         return out
+
+    def _cells(self, pose: int, action: int) -> frozenset:
+        g = self.graph
+        cells = g.coll[pose, action].tolist() + (g.carry[pose, action].tolist() if self.carrying else [])
+        return frozenset(c for c in cells if c >= 0)
+
+    def cells(self, pose: int, action: int) -> frozenset:
+        """The collision set of ``action`` from ``pose`` (with the carried tile's cells when
+        this walk carries one); also for pick and place, which :meth:`moves` leaves out."""
+        return self._cells(pose, action)
 
     # ---- distances ----------------------------------------------------------------------------
 
@@ -61,22 +80,56 @@ class Walk:
         """Poses standing on the structure with the front foot on ``cell``."""
         return np.flatnonzero(self.standing & (self.graph.feet[:, 0] == cell))
 
+    def facing_poses(self, cell: int) -> np.ndarray:
+        """Poses standing on the structure from which a pick or place targets ``cell``."""
+        return np.flatnonzero((self._targets == cell).any(axis=1))
+
+    def manipulation(self, pose: int, cell: int, kind: Kind) -> int | None:
+        """The pick (or place) action of ``pose`` that targets ``cell``, or None."""
+        for a in np.flatnonzero(self._targets[pose] == cell).tolist():
+            if self.graph.kind[a] == kind:
+                return a
+        return None
+
     def distances(self, cell: int) -> np.ndarray:
         """``int32[P]``: fewest steps from each pose to a pose with its front foot on ``cell``
         (:data:`UNREACHABLE` where none). Cached per goal cell."""
-        if cell in self._dist:
-            self._dist.move_to_end(cell)
-            return self._dist[cell]
-        sources = self.goal_poses(cell)
+        return self.distances_to(("front", cell), lambda: self.goal_poses(cell))
+
+    def facing_distances(self, cell: int) -> np.ndarray:
+        """``int32[P]``: fewest steps from each pose to a pose facing ``cell``. Cached."""
+        return self.distances_to(("facing", cell), lambda: self.facing_poses(cell))
+
+    def distances_to(self, key, sources) -> np.ndarray:
+        """``int32[P]``: fewest steps from each pose to one of the poses ``sources()`` (called
+        only on a cache miss; ``key`` names the set)."""
+        if key in self._dist:
+            self._dist.move_to_end(key)
+            return self._dist[key]
+        found = np.asarray(sources(), dtype=np.int64)
         n = self.succ.shape[0]
-        if len(sources) == 0:
+        if len(found) == 0:
             dist = np.full(n, UNREACHABLE, dtype=np.int32)
         else:
-            found = dijkstra(self._reverse_graph(), indices=sources, unweighted=True, min_only=True)
-            dist = np.where(np.isfinite(found), found, UNREACHABLE).astype(np.int32)
-        self._dist[cell] = dist
+            out = dijkstra(self._reverse_graph(), indices=found, unweighted=True, min_only=True)
+            dist = np.where(np.isfinite(out), out, UNREACHABLE).astype(np.int32)
+        self._dist[key] = dist
         while len(self._dist) > 256:
             self._dist.popitem(last=False)
+        return dist
+
+    def from_pose(self, pose: int) -> np.ndarray:
+        """``int32[P]``: fewest steps from ``pose`` to each pose (forward search). Cached."""
+        if pose in self._forward:
+            self._forward.move_to_end(pose)
+            return self._forward[pose]
+        if self._forward_graph is None:
+            self._forward_graph = self._reverse_graph().T.tocsr()
+        out = dijkstra(self._forward_graph, indices=[pose], unweighted=True)[0]
+        dist = np.where(np.isfinite(out), out, UNREACHABLE).astype(np.int32)
+        self._forward[pose] = dist
+        while len(self._forward) > 64:
+            self._forward.popitem(last=False)
         return dist
 
     def _reverse_graph(self) -> csr_matrix:
@@ -93,7 +146,11 @@ class Walk:
         """A next pose on a shortest walk to ``cell`` (the pose itself when there, or stuck).
 
         Ties go to the lowest action id, so the policy is deterministic."""
-        dist = self.distances(cell)
+        return self.towards(pose, self.distances(cell))
+
+    def towards(self, pose: int, dist: np.ndarray) -> int:
+        """A next pose that lowers the distance table ``dist`` the most (the pose itself at
+        distance 0 or when stuck); ties go to the lowest action id."""
         if dist[pose] == 0 or dist[pose] >= UNREACHABLE:
             return pose
         row = self.succ[pose]
@@ -104,14 +161,14 @@ class Walk:
 _CACHE: OrderedDict = OrderedDict()
 
 
-def walk_for(graph: PoseGraph, tiles: np.ndarray) -> Walk:
-    """The :class:`Walk` of ``graph`` on ``tiles``, cached by graph and tile set."""
-    key = (id(graph), np.asarray(tiles, dtype=bool).tobytes())
+def walk_for(graph: PoseGraph, tiles: np.ndarray, carrying: bool = False) -> Walk:
+    """The :class:`Walk` of ``graph`` on ``tiles``, cached by graph, tile set and carrying flag."""
+    key = (id(graph), np.asarray(tiles, dtype=bool).tobytes(), carrying)
     walk = _CACHE.get(key)
     if walk is None or walk.graph is not graph:
-        walk = Walk(graph, tiles)
+        walk = Walk(graph, tiles, carrying)
         _CACHE[key] = walk
-        while len(_CACHE) > 32:
+        while len(_CACHE) > 64:
             _CACHE.popitem(last=False)
     else:
         _CACHE.move_to_end(key)

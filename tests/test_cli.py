@@ -115,8 +115,9 @@ def test_gap_reports_the_heuristics_against_the_optimum(tmp_path, capsys):
     assert by[("compare-2", "cpsat")]["status"] == "optimal" and by[("compare-2", "cpsat")]["gap_percent"] == 0.0
     ta = by[("compare-2", "temporal-astar")]
     assert ta["gap_percent"] == 100.0 * (ta["makespan"] - 10) / 10
-    assert by[("corridor-2", "temporal-astar")]["status"] == "n/a"
     assert by[("corridor-2", "cpsat")]["makespan"] == 13
+    loop = by[("corridor-2", "temporal-astar")]  # the reconfiguration loop: never below the optimum
+    assert loop["status"] == "feasible" and loop["makespan"] >= 13
     lines = out_csv.read_text().splitlines()
     assert lines[0].startswith("instance,method,status") and len(lines) == 1 + len(rows)
 

@@ -2,8 +2,8 @@
 
 For every instance, every method runs under the same time limit; the optimum is the makespan an
 exact method proved optimal, and each method's gap is how much longer its makespan is, in percent.
-Methods that do not apply to an instance (the walking planners on a reconfiguration instance) are
-listed as ``n/a`` with the reason.
+Methods that do not apply to an instance (joint A* on a reconfiguration instance; Temporal A* and
+M* run the reconfiguration loop there) are listed as ``n/a`` with the reason.
 """
 from __future__ import annotations
 

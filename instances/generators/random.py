@@ -20,9 +20,10 @@ import random
 import numpy as np
 
 from ..errors import InstanceError
-from ..grid import Grid, articulation_points
+from ..grid import Grid, articulation_points, neighbour_table
 from ..instance import Instance, Robot, Task, check_instance
 from ..moveset import load_moveset
+from ..posegraph import compile_posegraph
 
 XY = tuple[int, int]
 _STEPS = ((1, 0), (-1, 0), (0, 1), (0, -1))
@@ -45,10 +46,11 @@ def random_reconfiguration(width: int, height: int, tiles: int, robots: int, mov
     start = _polyomino(width, height, tiles, rnd)
     placed = _place_robots(start, width, height, robots, ms.footprint, rnd)
     held = {c for r in placed for c in _feet(r)}
+    graph = compile_posegraph(ms, width, height, np.zeros(width * height, dtype=bool))
     now = start.copy()
     sequence: list[Task] = []
     for k in range(moved):
-        move = _random_move(now, start, held, width, height, rnd)
+        move = _random_move(now, start, held, width, height, graph, rnd)
         if move is None:
             raise InstanceError(f"cannot move {moved} tiles of {tiles} on a {width}x{height} grid with {robots} "
                                 f"robots: only {k} moves keep the structure connected (fewer --moved, more room)")
@@ -219,10 +221,14 @@ def _robot_in(cells: list[XY], used: set[XY], footprint: str, rnd: random.Random
     return rnd.choice(options) if options else None
 
 
-def _random_move(now: np.ndarray, start: np.ndarray, held: set, width: int, height: int,
+def _random_move(now: np.ndarray, start: np.ndarray, held: set, width: int, height: int, graph,
                  rnd: random.Random) -> tuple[int, int] | None:
     """A tile of the start still in place that may be picked, and an empty cell never a start
-    tile next to the rest, so that every move adds one to the difference."""
+    tile next to the rest, so that every move adds one to the difference; a robot of ``graph``
+    must be able to pick the tile and carry it to face the place."""
+    from bille.heuristics.sequence import runnable
+
+    nbr = neighbour_table(width, height)
     cut = articulation_points(now, width, height)
     picks = [c for c in np.flatnonzero(now & start & ~cut).tolist() if (c % width, c // width) not in held]
     rnd.shuffle(picks)
@@ -231,8 +237,10 @@ def _random_move(now: np.ndarray, start: np.ndarray, held: set, width: int, heig
         rest[pick] = False
         places = sorted({c2 for c in np.flatnonzero(rest).tolist() for c2 in _around(c, width, height)
                          if not rest[c2] and not start[c2]})
-        if places:
-            return pick, rnd.choice(places)
+        rnd.shuffle(places)
+        for place in places:
+            if runnable(now, cut, pick, place, nbr, graph, width, height):
+                return pick, place
     return None
 
 
