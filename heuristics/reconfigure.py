@@ -12,9 +12,10 @@ or ``place c`` (carry the tile to a pose facing ``c``, place it). Every step:
    robot's delivery job.
 2. **Load transfer** (``load_transfer=True``), equations (1)-(3) of the paper; see
    :meth:`Loop.transfers`.
-3. **Goals.** A robot with legs is bound for the poses facing its next leg's cell (while a relay
-   tile it must pick up is not there yet, it has no goal, so that it keeps clear of the robot
-   bringing it); an idle robot
+3. **Goals.** A robot with legs is bound for the poses facing its next leg's cell, if that pick
+   or place could happen now (step 4, robots aside); otherwise it has no goal for now, so that it
+   gives way instead of holding a pose others need (a relay tile not dropped yet, a pick that
+   must wait for another job); an idle robot
    for its goal cell if it has one; an idle robot standing on a tile that a pending job must
    pick for any pose whose feet are off those tiles; any other idle robot is free (it only keeps
    out of the way). Distance tables are cached per structure and goal.
@@ -53,6 +54,19 @@ from .temporal_astar import _shift_up
 from .walking import UNREACHABLE, Walk, walk_for
 
 MOTIONS = ("temporal-astar", "mstar")
+PASSING = 2  # a blocked leg costs its free distance plus this many steps per cell between the two robots
+
+
+def _nearest(walk: Walk, pose: int, cell: int) -> tuple[int, int]:
+    """Steps from ``pose`` to the nearest pose facing ``cell`` plus one, and that pose."""
+    facing = walk.facing_poses(cell)
+    if len(facing) == 0 or not walk.standing[pose]:
+        return UNREACHABLE, -1
+    dist = walk.from_pose(pose)[facing]
+    k = int(np.argmin(dist))
+    if dist[k] >= UNREACHABLE:
+        return UNREACHABLE, -1
+    return int(dist[k]) + 1, int(facing[k])
 
 
 @dataclass(frozen=True)
@@ -136,6 +150,7 @@ class Loop:
                             "pairs_considered": 0, "deferred_manipulations": 0, "priority_shifts": 0, "circle_shifts": 0, "cautious_steps": 0,
                             "replans": 0, "expanded": 0, "plan_ms_mean": 0.0, "plan_ms_max": 0.0}
         self._lists: dict = {}
+        self._ready_key, self._ready = None, set()
         self._joint: list | None = None  # the cached M* plan: remaining joint actions
         self._joint_key = None  # the state, goals and manipulations the cached plan expects next
 
@@ -191,25 +206,25 @@ class Loop:
         if around is not None:
             tiles = tiles.copy()
             tiles[list(self._cells_now(around))] = False
-        walk = walk_for(self.world.graphs[i], tiles, carrying)
         pose = self.state.poses[i] if pose is None else pose
-        facing = walk.facing_poses(cell)
-        if len(facing) == 0 or not walk.standing[pose]:
-            return UNREACHABLE, -1
-        dist = walk.from_pose(pose)[facing]
-        k = int(np.argmin(dist))
-        if dist[k] >= UNREACHABLE:
-            return UNREACHABLE, -1
-        return int(dist[k]) + 1, int(facing[k])
+        found = _nearest(walk_for(self.world.graphs[i], tiles, carrying), pose, cell)
+        if found[0] >= UNREACHABLE and around is not None:
+            # the partner is in the way: it must back off before this robot gets past
+            free = _nearest(self.walk(i, carrying), pose, cell)
+            if free[0] < UNREACHABLE:
+                return free[0] + PASSING * self._manhattan(i, around), free[1]
+        return found
 
     def transfer_cells(self, i: int) -> list[int]:
         """Candidate transfer cells for robot ``i``: empty cells that touch the structure, within
         Manhattan distance ``d_tr`` of its front foot, that no pending job or leg names, not
-        under any robot, and where a place keeps the structure and the sequence valid."""
+        next to a tile still to be picked (a relay tile hanging on it would hold that pick up),
+        and not under any robot."""
         w, h = self.instance.width, self.instance.height
         tiles = self.state.tiles
         fx, fy = self.world.graphs[i].feet_xy(self.state.poses[i])[0]
         busy = self._pending_cells() | self._occupied_cells()
+        picks = self._pending_picks()
         free = ~tiles & ~self.world.obstacles
         out = []
         for y in range(max(0, fy - self.d_tr), min(h, fy + self.d_tr + 1)):
@@ -217,8 +232,9 @@ class Loop:
                 c = y * w + x
                 if abs(x - fx) + abs(y - fy) > self.d_tr or not free[c] or c in busy:
                     continue
-                if any(0 <= x + dx < w and 0 <= y + dy < h and tiles[(y + dy) * w + x + dx]
-                       for dx, dy in ((1, 0), (-1, 0), (0, 1), (0, -1))):
+                around = [(y + dy) * w + x + dx for dx, dy in ((1, 0), (-1, 0), (0, 1), (0, -1))
+                          if 0 <= x + dx < w and 0 <= y + dy < h]
+                if any(tiles[n] for n in around) and picks.isdisjoint(around):
                     out.append(c)
         return out
 
@@ -319,10 +335,9 @@ class Loop:
         """Robot ``i``'s distance table to its current goal poses, or None (free)."""
         walk = self.walk(i)
         if self.legs[i]:
-            leg = self.legs[i][0]
-            if leg.kind == Kind.PICK and not self.state.tiles[leg.cell]:
-                return None  # a relay tile not dropped yet: keep clear of the robot bringing it
-            return walk.facing_distances(leg.cell)
+            if i not in self.ready():
+                return None  # its pick or place cannot happen yet: give way meanwhile
+            return walk.facing_distances(self.legs[i][0].cell)
         if self.goal_cells[i] >= 0:
             return walk.distances(self.goal_cells[i])
         needed = self._pending_picks()
@@ -394,11 +409,35 @@ class Loop:
                 return False
         return True
 
+    def ready(self) -> set[int]:
+        """Robots whose next pick or place could happen now as far as the tiles go: the cell
+        holds a tile (pick) or not (place), and the structure and the rest of the sequence stay
+        valid after it. Cached per tiles and legs."""
+        key = (self.state.tiles.tobytes(), tuple(map(tuple, self.legs)), self.next_job)
+        if self._ready_key != key:
+            ops = self._pending_ops()
+            out = set()
+            for i, legs in enumerate(self.legs):
+                rest = [op for op in ops if op[3] != (i, legs[0])] if legs else []
+                if legs and self._allowed(self.state.tiles, legs[0], rest) is not None:
+                    out.add(i)
+            self._ready_key, self._ready = key, out
+        return self._ready
+
+    def _allowed(self, tiles: np.ndarray, leg: Leg, rest) -> np.ndarray | None:
+        """The tiles after ``leg`` if it may happen on ``tiles`` with ``rest`` still to run."""
+        if tiles[leg.cell] != (leg.kind == Kind.PICK):
+            return None
+        trial = tiles.copy()
+        trial[leg.cell] = leg.kind == Kind.PLACE
+        if not is_connected(trial, self.instance.width, self.instance.height) or not self._executable(trial, rest):
+            return None
+        return trial
+
     def manipulations(self) -> tuple[dict[int, int], dict[int, frozenset]]:
         """The picks and places that happen this step, ``{robot: action}``, and the *intents*:
         ``{robot: cells}`` of robots that face their leg's cell and would manipulate now but for
         another robot on the cells (module docstring)."""
-        w, h = self.instance.width, self.instance.height
         tiles = self.state.tiles.copy()
         ops = self._pending_ops()
         taken: set[int] = set()
@@ -415,12 +454,9 @@ class Loop:
             cells = walk.cells(pose, action)
             if not cells.isdisjoint(taken):
                 continue
-            trial = tiles.copy()
-            if leg.kind == Kind.PICK and not trial[leg.cell] or leg.kind == Kind.PLACE and trial[leg.cell]:
-                continue  # a relay pick-up before the drop, or a cell a later job frees first
-            trial[leg.cell] = leg.kind == Kind.PLACE
             rest = [op for op in ops if op[3] != (i, leg)]
-            if not is_connected(trial, w, h) or not self._executable(trial, rest):
+            trial = self._allowed(tiles, leg, rest)
+            if trial is None:
                 self.stats["deferred_manipulations"] += 1
                 continue
             if not cells.isdisjoint(self._occupied_cells(but=i)):

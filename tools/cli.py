@@ -110,18 +110,26 @@ def list_() -> int:
 @click.option("--horizon", "-H", type=click.IntRange(min=1), help="Steps planned ahead (temporal-astar).")
 @click.option("--time-limit", type=float, help="Seconds before giving up.")
 @click.option("--threads", type=click.IntRange(min=1), help="Solver workers (cpsat).")
+@click.option("--load-transfer", is_flag=True, default=None,
+              help="Reconfiguration (temporal-astar, mstar): robots exchange loads (paper, equations 1-3).")
+@click.option("--d-tr", type=click.IntRange(min=0), help="Manhattan distance within which robots consider a load transfer.")
 @click.option("-O", "--option", "extra", multiple=True, metavar="NAME=VALUE",
               help="Another option of the method, e.g. -O od=false or -O max_steps=200.")
 @click.option("-o", "--output", type=click.Path(dir_okay=False), help="Write the schedule here.")
 @click.option("--rerun", "rrd", type=click.Path(dir_okay=False), metavar="OUT.rrd",
               help="Write a rerun recording of the schedule found.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of text.")
-def solve_(instance: str, method: str, epsilon, horizon, time_limit, threads, extra, output, rrd, as_json) -> int:
-    """Solve INSTANCE with METHOD; print the status and metrics (exit 1 if no schedule)."""
+def solve_(instance: str, method: str, epsilon, horizon, time_limit, threads, load_transfer, d_tr, extra, output, rrd,
+           as_json) -> int:
+    """Solve INSTANCE with METHOD; print the status and metrics (exit 1 if no schedule).
+
+    On an instance that moves tiles, temporal-astar and mstar run the reconfiguration loop: the
+    instance's tasks (or a derived sequence) are handed to the robots and carried out."""
     if time_limit is not None and time_limit <= 0:
         raise click.BadParameter("must be positive", param_hint="--time-limit")
     _writable(output, rrd)
-    given = dict(epsilon=epsilon, horizon=horizon, time_limit=time_limit, threads=threads)
+    given = dict(epsilon=epsilon, horizon=horizon, time_limit=time_limit, threads=threads,
+                 load_transfer=load_transfer, d_tr=d_tr)
     options = {k: v for k, v in given.items() if v is not None}
     options.update(_parse_options(extra))
     inst = _instance(instance)
@@ -143,9 +151,39 @@ def solve_(instance: str, method: str, epsilon, horizon, time_limit, threads, ex
     for key in ("unreachable", "failure", "violation"):
         if key in result.stats:
             click.echo(f"{key}: {_explain(inst, key, result.stats[key])}")
+    if result.stats.get("load_transfer"):
+        click.echo(f"load transfers: {result.stats['relays']} relays, {result.stats['swaps']} swaps "
+                   f"({result.stats['pairs_considered']} robot pairs within d_tr considered)")
     if output and result.schedule is not None:
         click.echo(f"schedule written to {output}")
     return EXIT_OK if result.schedule is not None else EXIT_NO
+
+
+@cli.command("plan-sequence")
+@click.argument("instance")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of text.")
+def plan_sequence(instance: str, as_json: bool) -> int:
+    """Print the reconfiguration sequence of INSTANCE: its tasks (checked), or one derived so
+    that running it one task at a time keeps the structure connected."""
+    from bille.heuristics.sequence import sequence_of
+
+    inst = _instance(instance)
+    jobs = sequence_of(inst)
+    source = "given" if inst.tasks is not None else "derived"
+    xy = inst.world.xy
+    rows = [{"pick": None if j.pick is None else list(xy(j.pick)), "place": list(xy(j.place)),
+             **({"carrier": j.carrier} if j.pick is None else {})} for j in jobs]
+    if as_json:
+        _print_json({"instance": inst.name, "source": source, "tasks": rows})
+        return EXIT_OK
+    click.echo(f"{inst.name}: {len(jobs)} tasks ({source}); each keeps the structure connected when run in order")
+    click.echo("tasks:")
+    for j in jobs:
+        if j.pick is None:
+            click.echo(f"  - {{place: {list(xy(j.place))}}}  # the tile robot {j.carrier} carries at the start")
+        else:
+            click.echo(f"  - {{pick: {list(xy(j.pick))}, place: {list(xy(j.place))}}}")
+    return EXIT_OK
 
 
 def _parse_options(items) -> dict:
@@ -414,6 +452,45 @@ def bench_view(size: int, robots: int, steps: int, seed: int) -> int:
 
     for line in report(size, robots, steps, seed):
         click.echo(line)
+    return EXIT_OK
+
+
+@bench.command("load-transfer")
+@click.option("--maps", default=",".join(f"lt-{k}" for k in range(1, 9)), show_default=True,
+              help="Comma-separated bundled maps or instance files.")
+@click.option("--horizon", "-H", type=click.IntRange(min=1), default=10, show_default=True)
+@click.option("--d-tr", type=click.IntRange(min=0), default=5, show_default=True)
+@click.option("--time-limit", type=click.FloatRange(min=0.1), default=120.0, show_default=True, help="Seconds per run.")
+@click.option("--random", "random_runs", type=click.IntRange(min=0), default=0, show_default=True,
+              help="Also run this many random reconfiguration instances per size (10-50 tiles moved, 2-10 robots).")
+@click.option("--exact-limit", type=click.FloatRange(min=0), default=0.0, show_default=True,
+              help="Seconds of CP-SAT per random instance for the gap to the optimum (0: skip).")
+@click.option("--out", type=click.Path(file_okay=False), default="bench-out", show_default=True,
+              help="Folder for load-transfer.csv and load-transfer.png.")
+def bench_load_transfer(maps: str, horizon: int, d_tr: int, time_limit: float, random_runs: int, exact_limit: float,
+                        out: str) -> int:
+    """The paper's load-transfer experiment: each map with and without load transfer (Temporal A*,
+    epsilon 1), the percentage decrease in time steps and tiles traveled, and a bar plot."""
+    from pathlib import Path
+
+    from .bench_transfer import plot, random_report, run_maps, table, write_csv
+
+    names = [m.strip() for m in maps.split(",") if m.strip()]
+    instances = [_instance(name) for name in names]  # unknown names fail here, before any work
+    folder = Path(out)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise BilleError(f"{folder}: cannot create the output folder ({exc.strerror})") from None
+    rows = run_maps(instances, horizon, d_tr, time_limit)
+    for line in table(rows):
+        click.echo(line)
+    write_csv(rows, folder / "load-transfer.csv")
+    plot(rows, folder / "load-transfer.png")
+    click.echo(f"wrote {folder / 'load-transfer.csv'} and {folder / 'load-transfer.png'}")
+    if random_runs:
+        for line in random_report(random_runs, horizon, d_tr, time_limit, exact_limit):
+            click.echo(line)
     return EXIT_OK
 
 

@@ -1,0 +1,163 @@
+"""``bille bench load-transfer``: the paper's load-transfer experiment (Results, "Load transfer").
+
+Each map runs twice with the reconfiguration loop and Temporal A* (epsilon 1, ``H`` 10 by
+default): without load transfer (the baseline of the same run) and with it (``d_tr`` 5). The
+table gives the percentage decrease in time steps (makespan) and tiles traveled, as in the
+paper's bar plot, which is drawn to a PNG. With ``--random N`` it also runs random
+reconfiguration instances (10 to 50 tiles moved, 2 to 10 robots): success rate and mean makespan
+with and without load transfer, and, with ``--exact-limit``, the gap to CP-SAT's optimum on the
+instances CP-SAT proves within that time.
+"""
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+import numpy as np
+
+from bille.instances import BilleError, Instance
+from bille.solvers import solve
+
+FIELDS = ("map", "robots", "tasks", "status_off", "steps_off", "traveled_off", "time_off", "status_on", "steps_on",
+          "traveled_on", "time_on", "relays", "swaps", "steps_decrease", "traveled_decrease")
+SIZES = ((10, 2), (20, 4), (30, 6), (50, 10))  # (tiles moved, robots) of the random instances
+
+
+def _run(inst: Instance, transfer: bool, horizon: int, d_tr: int, time_limit: float):
+    return solve(inst, "temporal-astar", epsilon=1.0, horizon=horizon, load_transfer=transfer, d_tr=d_tr,
+                 time_limit=time_limit)
+
+
+def decrease(before: int | None, after: int | None) -> float | None:
+    """Percentage decrease from ``before`` to ``after`` (None when either is missing).
+
+    >>> decrease(80, 60)
+    25.0
+    """
+    if before is None or after is None or before == 0:
+        return None
+    return round(100.0 * (before - after) / before, 1)
+
+
+def run_maps(instances: list[Instance], horizon: int, d_tr: int, time_limit: float) -> list[dict]:
+    rows = []
+    for inst in instances:
+        off, on = (_run(inst, t, horizon, d_tr, time_limit) for t in (False, True))
+        row = {"map": inst.name, "robots": inst.num_robots, "tasks": on.stats.get("jobs"),
+               "relays": on.stats.get("relays", 0), "swaps": on.stats.get("swaps", 0)}
+        for tag, res in (("off", off), ("on", on)):
+            m = res.metrics
+            row[f"status_{tag}"] = res.status if res.schedule is not None else res.stats.get("failure", res.status)
+            row[f"steps_{tag}"] = None if m is None else m.makespan
+            row[f"traveled_{tag}"] = None if m is None else m.tiles_traveled
+            row[f"time_{tag}"] = round(res.time_s, 3)
+        row["steps_decrease"] = decrease(row["steps_off"], row["steps_on"])
+        row["traveled_decrease"] = decrease(row["traveled_off"], row["traveled_on"])
+        rows.append(row)
+    return rows
+
+
+def _cell(v) -> str:
+    return "N/A" if v is None else str(v)
+
+
+def table(rows: list[dict]) -> list[str]:
+    out = ["load transfer: Temporal A* without (baseline) and with load transfer; decrease in percent",
+           f"{'map':<8} {'robots':>6} {'tasks':>5} | {'steps off':>9} {'on':>5} {'dec%':>6} | "
+           f"{'traveled off':>12} {'on':>5} {'dec%':>6} | {'relays':>6} {'swaps':>5} | {'plan s off/on':>13}"]
+    for r in rows:
+        out.append(f"{r['map']:<8} {r['robots']:>6} {_cell(r['tasks']):>5} | {_cell(r['steps_off']):>9} "
+                   f"{_cell(r['steps_on']):>5} {_cell(r['steps_decrease']):>6} | {_cell(r['traveled_off']):>12} "
+                   f"{_cell(r['traveled_on']):>5} {_cell(r['traveled_decrease']):>6} | {r['relays']:>6} "
+                   f"{r['swaps']:>5} | {r['time_off']:>6}/{r['time_on']:<6}")
+    for r in rows:
+        for tag in ("off", "on"):
+            if r[f"steps_{tag}"] is None:
+                out.append(f"  {r['map']} with load transfer {tag}: no schedule ({r[f'status_{tag}']})")
+    both = [r for r in rows if r["steps_decrease"] is not None]
+    if both:
+        out.append(f"mean decrease over the {len(both)} maps solved both ways: time steps "
+                   f"{np.mean([r['steps_decrease'] for r in both]):.1f} %, tiles traveled "
+                   f"{np.mean([r['traveled_decrease'] for r in both]):.1f} %")
+    return out
+
+
+def write_csv(rows: list[dict], path: Path) -> None:
+    with open(path, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=FIELDS)
+        w.writeheader()
+        w.writerows(rows)
+
+
+def plot(rows: list[dict], path: Path) -> None:
+    """Bars of the percentage decrease in time steps and tiles traveled per map (the paper's
+    plot); a map solved only one way is marked with its status."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    x = np.arange(len(rows))
+    fig, ax = plt.subplots(figsize=(max(6, 0.9 * len(rows) + 2), 3.6))
+    for k, (key, name, color) in enumerate((("steps_decrease", "time steps", "#3b75af"),
+                                           ("traveled_decrease", "tiles traveled", "#ef8636"))):
+        vals = [r[key] if r[key] is not None else 0.0 for r in rows]
+        ax.bar(x + (k - 0.5) * 0.38, vals, 0.38, label=name, color=color)
+    for i, r in enumerate(rows):
+        if r["steps_decrease"] is None:
+            ax.text(i, 0, "off: N/A" if r["steps_off"] is None else "on: N/A", ha="center", va="bottom",
+                    fontsize=7, rotation=90)
+    ax.axhline(0, color="black", linewidth=0.8)
+    ax.set_xticks(x, [r["map"] for r in rows])
+    ax.set_ylabel("decrease with load transfer [%]")
+    ax.legend(fontsize=8, frameon=False)
+    fig.tight_layout()
+    try:
+        fig.savefig(path, dpi=130)
+    except OSError as exc:
+        raise BilleError(f"{path}: cannot write the plot ({exc.strerror})") from None
+    finally:
+        plt.close(fig)
+
+
+def random_report(runs: int, horizon: int, d_tr: int, time_limit: float, exact_limit: float) -> list[str]:
+    """Success rate and mean makespan with and without load transfer on random instances, and
+    the gap to the optimum where CP-SAT proves one within ``exact_limit`` seconds."""
+    from bille.heuristics.sequence import SequenceError
+    from bille.instances.generators.random import random_reconfiguration
+
+    out = [f"random reconfiguration instances ({runs} per size; S7; Temporal A*, H {horizon}, d_tr {d_tr})",
+           f"{'moved':>5} {'robots':>6} | {'solved off':>10} {'on':>4} | {'mean steps off':>14} {'on':>6} | "
+           f"{'optimal':>7} {'gap% off':>8} {'on':>6}"]
+    for moved, robots in SIZES:
+        side = max(12, int(np.ceil(np.sqrt(6 * moved))))
+        solved = {False: [], True: []}
+        gaps = {False: [], True: []}
+        optimal = 0
+        for seed in range(runs):
+            inst = random_reconfiguration(side, side, 3 * moved, robots, moved, seed=seed)
+            results = {}
+            for transfer in (False, True):
+                try:
+                    results[transfer] = _run(inst, transfer, horizon, d_tr, time_limit)
+                except SequenceError:
+                    results[transfer] = None
+                res = results[transfer]
+                if res is not None and res.metrics is not None:
+                    solved[transfer].append(res.metrics.makespan)
+            if exact_limit > 0:
+                exact = solve(inst, "cpsat", time_limit=exact_limit)
+                if exact.status == "optimal":
+                    optimal += 1
+                    for transfer, res in results.items():
+                        if res is not None and res.metrics is not None:
+                            gaps[transfer].append(100.0 * (res.metrics.makespan - exact.metrics.makespan)
+                                                  / max(1, exact.metrics.makespan))
+
+        def mean(v):
+            return f"{np.mean(v):.1f}" if v else "N/A"
+
+        out.append(f"{moved:>5} {robots:>6} | {len(solved[False]):>7}/{runs:<2} {len(solved[True]):>2}/{runs:<2}| "
+                   f"{mean(solved[False]):>14} {mean(solved[True]):>6} | {optimal:>7} {mean(gaps[False]):>8} "
+                   f"{mean(gaps[True]):>6}")
+    return out
