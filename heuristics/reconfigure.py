@@ -54,6 +54,7 @@ from .temporal_astar import _shift_up
 from .walking import UNREACHABLE, Walk, walk_for
 
 MOTIONS = ("temporal-astar", "mstar")
+MSTAR_EXPANSIONS = 100_000  # per M* replan: a joint plan that needs more ends the run
 PASSING = 2  # a blocked leg costs its free distance plus this many steps per cell between the two robots
 
 
@@ -525,7 +526,8 @@ class Loop:
             dists = [None if d is not None and d[p] >= UNREACHABLE else d for d, p in zip(dists, poses)]
             problem = JointProblem.towards(self.instance, walks, dists, poses)
             left = None if self.deadline is None else max(0.1, self.deadline - time.perf_counter())
-            status, steps, stats = joint_plan(problem, epsilon=self.epsilon, time_limit=left)
+            status, steps, stats = joint_plan(problem, epsilon=self.epsilon, time_limit=left,
+                                              max_expansions=MSTAR_EXPANSIONS)
             self.stats["replans"] += 1
             self.stats["expanded"] += stats["expanded"]
             if steps is None:

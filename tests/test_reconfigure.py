@@ -1,0 +1,238 @@
+"""The reconfiguration loop: sequences, allocation, manipulation rules, load transfer."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from bille.heuristics.reconfigure import Leg, Loop
+from bille.heuristics.sequence import SequenceError, check, derive, sequence_of
+from bille.instances import instance_from_text, load_instance
+from bille.instances.bundled import bundled_path
+from bille.instances.generators.random import random_reconfiguration
+from bille.instances.grid import is_connected
+from bille.instances.moveset import Kind
+from bille.instances.rules import State
+from bille.solvers import solve, validate
+from bille.tools.cli import main
+
+
+def cli(capsys, *argv):
+    with pytest.raises(SystemExit) as info:
+        main(list(argv))
+    out, err = capsys.readouterr()
+    return info.value.code, out, err
+
+
+def bundled(name):
+    return load_instance(bundled_path(name))
+
+
+def cell(inst, x, y):
+    return y * inst.width + x
+
+
+# ---- sequences ---------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("seed", range(6))
+def test_a_derived_sequence_keeps_the_structure_connected_one_task_at_a_time(seed):
+    inst = random_reconfiguration(14, 14, 45, 2, 8, seed=seed)
+    jobs = derive(inst)
+    assert len(jobs) == 8
+    tiles = inst.start.tiles.copy()
+    for job in jobs:  # replayed here, independently of check()
+        assert tiles[job.pick] and not tiles[job.place]
+        tiles[job.pick] = False
+        assert is_connected(tiles, inst.width, inst.height)
+        tiles[job.place] = True
+        assert is_connected(tiles, inst.width, inst.height)
+    assert np.array_equal(tiles, inst.goal_tiles)
+
+
+def test_given_tasks_are_used_as_given():
+    inst = bundled("lt-4")
+    jobs = sequence_of(inst)
+    assert [(inst.world.xy(j.pick), inst.world.xy(j.place)) for j in jobs] == [(t.pick, t.place) for t in inst.tasks]
+
+
+def test_a_carried_tile_becomes_a_delivery():
+    jobs = sequence_of(bundled("corridor-2"))
+    assert len(jobs) == 1 and jobs[0].pick is None and jobs[0].carrier == 1
+
+
+BAD_TASKS = {
+    "picks an empty cell": ("{pick: [0, 0], place: [4, 1]}", "holds no tile"),
+    "places on a tile": ("{pick: [0, 1], place: [2, 1]}", "already holds a tile"),
+    "disconnects": ("{pick: [2, 1], place: [4, 1]}", "disconnects the structure"),
+    "misses the goal": ("{pick: [0, 1], place: [1, 0]}", "do not reach the goal"),
+}
+
+
+def _with_tasks(task: str):
+    return instance_from_text(f"""name: bad
+moveset: point
+grid: |
+  .....
+  TTTT.
+goal: |
+  .....
+  .TTTT
+robots: [{{at: [3, 1]}}]
+tasks:
+  - {task}
+""")
+
+
+@pytest.mark.parametrize("case", sorted(BAD_TASKS))
+def test_bad_tasks_are_named(case):
+    task, message = BAD_TASKS[case]
+    with pytest.raises(SequenceError, match=message) as info:
+        sequence_of(_with_tasks(task))
+    assert "tasks" in str(info.value)
+
+
+@pytest.mark.parametrize("case", sorted(BAD_TASKS))
+def test_bad_tasks_exit_2_on_the_command_line(case, tmp_path, capsys):
+    task, message = BAD_TASKS[case]
+    path = tmp_path / "bad.yaml"
+    path.write_text(f"name: bad\nmoveset: point\ngrid: |\n  .....\n  TTTT.\ngoal: |\n  .....\n  .TTTT\n"
+                    f"robots: [{{at: [3, 1]}}]\ntasks:\n  - {task}\n")
+    for command in ("plan-sequence", "solve"):
+        code, out, err = cli(capsys, command, str(path))
+        assert code == 2 and out == ""
+        lines = err.strip().splitlines()
+        assert len(lines) == 1 and message in lines[0] and "tasks" in lines[0]
+
+
+def test_plan_sequence_prints_the_tasks(capsys):
+    code, out, _ = cli(capsys, "plan-sequence", "reconfig-30")
+    assert code == 0
+    assert "3 tasks (derived)" in out and out.count("pick:") == 3
+
+
+def test_check_rejects_a_sequence_that_does_not_reach_the_goal():
+    inst = bundled("reconfig-30")
+    with pytest.raises(SequenceError, match="goal"):
+        check(inst, derive(inst)[:2])
+
+
+# ---- the loop end to end -------------------------------------------------------------------------
+
+@pytest.mark.parametrize("name", ["corridor-2", "reconfig-30", "bridge-2", "lt-1", "lt-4"])
+@pytest.mark.parametrize("transfer", [False, True])
+def test_every_schedule_of_the_loop_validates(name, transfer):
+    inst = bundled(name)
+    result = solve(inst, "temporal-astar", horizon=10, load_transfer=transfer)
+    if result.schedule is None:  # the loop is not complete; a stop must say why
+        assert result.status == "timeout" and result.stats["failure"]
+        return
+    assert result.status == "feasible"
+    report = validate(inst, result.schedule)
+    assert report.valid and report.metrics.makespan == result.metrics.makespan
+    assert report.metrics.picks == report.metrics.places - sum(r.carrying for r in inst.robots)
+
+
+@pytest.mark.parametrize("name", ["corridor-2", "lt-1"])
+def test_mstar_as_the_motion_layer(name):
+    inst = bundled(name)
+    result = solve(inst, "mstar")
+    assert result.status == "feasible" and validate(inst, result.schedule).valid
+    assert result.stats["motion"] == "mstar"
+
+
+def test_load_transfer_shortens_a_head_on_bridge():
+    # lt-1: one robot per platform; tiles go west to east over a one-tile-wide bridge with a bay
+    inst = bundled("lt-1")
+    off = solve(inst, "temporal-astar", horizon=10)
+    on = solve(inst, "temporal-astar", horizon=10, load_transfer=True, d_tr=5)
+    assert on.stats["relays"] > 0
+    assert on.metrics.makespan < off.metrics.makespan
+    assert on.metrics.tiles_traveled < off.metrics.tiles_traveled
+
+
+def test_swapping_drop_offs_shortens_tiles_going_both_ways():
+    inst = bundled("lt-4")
+    off = solve(inst, "temporal-astar", horizon=10)
+    on = solve(inst, "temporal-astar", horizon=10, load_transfer=True)
+    assert on.stats["swaps"] > 0
+    assert on.metrics.makespan < off.metrics.makespan and on.metrics.tiles_traveled < off.metrics.tiles_traveled
+
+
+# ---- the parts -----------------------------------------------------------------------------------
+
+def _carriers_on_the_bridge(to0, to1, d_tr=5):
+    """lt-4 with robot 0 on the bridge heading east and robot 1 three cells east of it heading
+    west, both carrying; robot 0 drops at ``to0``, robot 1 at ``to1``."""
+    inst = bundled("lt-4")
+    loop = Loop(inst, load_transfer=True, d_tr=d_tr)
+    g = inst.world.graphs[0]
+    poses = (g.pose_of((8, 3), (7, 3)), g.pose_of((11, 3), (12, 3)))
+    loop.state = State(inst.start.tiles, poses, (True, True))
+    loop.next_job = len(loop.jobs)
+    loop.legs = [[Leg(Kind.PLACE, cell(inst, *to0), 0)], [Leg(Kind.PLACE, cell(inst, *to1), 1)]]
+    return loop
+
+
+def test_the_swap_fires_when_the_drop_offs_lie_past_each_other():
+    loop = _carriers_on_the_bridge((17, 1), (0, 2))
+    chosen = loop.transfers()
+    assert [t.kind for t in chosen] == ["swap"] and chosen[0].saving > 0
+    assert [loop.world.xy(legs[0].cell) for legs in loop.legs] == [(0, 2), (17, 1)]
+
+
+def test_the_swap_does_not_fire_when_each_drop_off_is_on_its_own_side():
+    loop = _carriers_on_the_bridge((0, 2), (17, 1))
+    assert loop.transfers() == []
+    assert [loop.world.xy(legs[0].cell) for legs in loop.legs] == [(0, 2), (17, 1)]
+
+
+def test_d_tr_limits_the_pairs_considered():
+    far = _carriers_on_the_bridge((17, 1), (0, 2), d_tr=2)  # the robots are 3 apart
+    assert far.transfers() == [] and far.stats["pairs_considered"] == 0
+    near = _carriers_on_the_bridge((17, 1), (0, 2), d_tr=3)
+    assert near.transfers() and near.stats["pairs_considered"] == 1
+
+
+def test_a_relay_hands_the_jobs_over():
+    inst = bundled("lt-1")
+    loop = Loop(inst, load_transfer=True)
+    g = inst.world.graphs[0]
+    # robot 0 carries east, about to leave the west platform; robot 1 comes west over the bridge
+    # to pick a tile of the west platform: they cannot pass each other on the bridge
+    loop.state = State(inst.start.tiles, (g.pose_of((4, 2), (3, 2)), g.pose_of((6, 3), (7, 3))), (True, False))
+    loop.next_job = len(loop.jobs)
+    x1, x2, a2 = cell(inst, 15, 1), cell(inst, 1, 2), cell(inst, 15, 2)
+    loop.legs = [[Leg(Kind.PLACE, x1, 0)], [Leg(Kind.PICK, x2, 1), Leg(Kind.PLACE, a2, 1)]]
+    (t,) = loop.transfers()
+    assert t.kind == "relay" and t.giver == 0 and t.taker == 1
+    assert [(leg.kind, leg.cell) for leg in loop.legs[0]] == [(Kind.PLACE, t.cell), (Kind.PICK, x2), (Kind.PLACE, a2)]
+    assert [(leg.kind, leg.cell) for leg in loop.legs[1]] == [(Kind.PICK, t.cell), (Kind.PLACE, x1)]
+    assert loop.legs[0][0].relay and loop.legs[1][0].relay
+    assert loop.transfers() == []  # robots in the middle of a relay are left alone
+
+
+def test_a_pick_that_would_disconnect_waits():
+    inst = bundled("lt-1")
+    loop = Loop(inst)
+    g = inst.world.graphs[0]
+    loop.next_job = len(loop.jobs)
+    bridge = cell(inst, 5, 3)  # the first bridge tile: picking it splits the structure
+    loop.state = State(inst.start.tiles, (g.pose_of((4, 3), (3, 3)), g.pose_of((13, 1), (14, 1))), (False, False))
+    loop.legs = [[Leg(Kind.PICK, bridge, 0), Leg(Kind.PLACE, cell(inst, 15, 1), 0)], []]
+    assert loop.manipulations() == ({}, {})
+    assert loop.stats["deferred_manipulations"] == 1 and 0 not in loop.ready()
+    assert loop.goal(0) is None  # it gives way meanwhile
+    # the same robot facing a tile of the outer column picks it at once
+    loop.state = State(inst.start.tiles, (g.pose_of((2, 1), (3, 1)), loop.state.poses[1]), (False, False))
+    loop.legs = [[Leg(Kind.PICK, cell(inst, 1, 1), 0), Leg(Kind.PLACE, cell(inst, 15, 1), 0)], []]
+    fixed, _ = loop.manipulations()
+    assert list(fixed) == [0] and g.kind[fixed[0]] == Kind.PICK
+
+
+def test_allocation_gives_the_next_job_to_the_nearest_idle_robot():
+    inst = bundled("lt-3")  # both robots start east; the first pick is on the west platform
+    loop = Loop(inst)
+    loop.allocate()
+    first = loop.jobs[0].pick
+    dists = [int(loop.walk(i).facing_distances(first)[p]) for i, p in enumerate(loop.state.poses)]
+    nearest = int(np.argmin(dists))
+    assert loop.legs[nearest][0].cell == first and loop.next_job == 2
