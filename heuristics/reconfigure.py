@@ -99,7 +99,14 @@ def plan(instance: Instance, *, motion: str = "temporal-astar", load_transfer: b
          epsilon: float = 1.0, horizon: int = 5, time_limit: float | None = None, max_steps: int | None = None,
          max_shifts: int | None = None, priorities: list[int] | None = None, method: str | None = None):
     """Run the reconfiguration loop (module docstring); returns a
-    :class:`~bille.solvers.result.Result` named ``method`` (default: ``motion``)."""
+    :class:`~bille.solvers.result.Result` named ``method`` (default: ``motion``).
+
+    ``motion``: ``temporal-astar`` or ``mstar``; ``load_transfer`` and ``d_tr``: equations
+    (1)-(3); ``epsilon``, ``horizon``, ``priorities`` (the initial ``Q``): as for Temporal A*;
+    ``max_steps``: the step bound (default: ten times the summed Manhattan carries plus ``W + H``
+    per job, at least 200); ``max_shifts``: priority shifts allowed when going round in circles
+    (default ``4 m^2 + 4 jobs``).
+    """
     return Loop(instance, motion=motion, load_transfer=load_transfer, d_tr=d_tr, epsilon=epsilon, horizon=horizon,
                 time_limit=time_limit, max_steps=max_steps, max_shifts=max_shifts,
                 priorities=priorities).run(method or motion)
@@ -140,9 +147,10 @@ class Loop:
                 self.legs[job.carrier] = [Leg(Kind.PLACE, job.place, k)]
                 self.next_job = k + 1
         w, h = instance.width, instance.height
-        reach = sum(abs(j.place % w - (j.pick if j.pick is not None else j.place) % w)
-                    + abs(j.place // w - (j.pick if j.pick is not None else j.place) // w) for j in self.jobs)
-        self.max_steps = max(200, 10 * (reach + len(self.jobs) * (w + h))) if max_steps is None else max_steps
+        carries = sum(abs(j.place % w - j.pick % w) + abs(j.place // w - j.pick // w)
+                      for j in self.jobs if j.pick is not None)
+        # default step bound: ten times the carries plus a crossing of the grid per job
+        self.max_steps = max(200, 10 * (carries + len(self.jobs) * (w + h))) if max_steps is None else max_steps
         self.max_shifts = 4 * m * m + 4 * len(self.jobs) if max_shifts is None else max_shifts
         self.goal_cells = instance.goal_cells
         self.steps: list[tuple[int, ...]] = []
