@@ -490,7 +490,7 @@ def bench_load_transfer(maps: str, horizon: int, d_tr: int, time_limit: float, r
     click.echo(f"wrote {folder / 'load-transfer.csv'} and {folder / 'load-transfer.png'}")
     if random_runs:
         for line in random_report(random_runs, horizon, d_tr, time_limit, exact_limit):
-            click.echo(line)
+            click.echo(line)  # one line per size as soon as it is measured
     return EXIT_OK
 
 
