@@ -43,14 +43,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from bille.instances import Instance, OptionError
-from bille.instances.grid import is_connected
 from bille.instances.moveset import Kind
 from bille.instances.rules import State, apply
 
 from .joint import JointProblem, to_result
-from .sequence import Job, sequence_of
+from .sequence import Job, apply_move, sequence_of
 from .spacetime import window
-from .temporal_astar import _shift_up
+from .temporal_astar import _shift_up, _timing
 from .walking import UNREACHABLE, Walk, walk_for
 
 MOTIONS = ("temporal-astar", "mstar")
@@ -156,8 +155,9 @@ class Loop:
         self.steps: list[tuple[int, ...]] = []
         self.stats: dict = {"motion": motion, "load_transfer": load_transfer, "d_tr": d_tr, "horizon": horizon,
                             "epsilon": epsilon, "jobs": len(self.jobs), "steps": 0, "relays": 0, "swaps": 0,
-                            "pairs_considered": 0, "deferred_manipulations": 0, "priority_shifts": 0, "circle_shifts": 0, "cautious_steps": 0,
-                            "replans": 0, "expanded": 0, "plan_ms_mean": 0.0, "plan_ms_max": 0.0}
+                            "pairs_considered": 0, "deferred_manipulations": 0, "priority_shifts": 0,
+                            "circle_shifts": 0, "cautious_steps": 0, "replans": 0, "expanded": 0,
+                            "plan_ms_mean": 0.0, "plan_ms_max": 0.0}
         self._lists: dict = {}
         self._ready_key, self._ready = None, set()
         self._joint: list | None = None  # the cached M* plan: remaining joint actions
@@ -169,9 +169,6 @@ class Loop:
         """Robot ``i``'s walking graph on the current tiles (carrying as now, unless given)."""
         carrying = self.state.carrying[i] if carrying is None else carrying
         return walk_for(self.world.graphs[i], self.state.tiles, carrying)
-
-    def xy(self, cell: int) -> tuple[int, int]:
-        return self.world.xy(cell)
 
     def _pending_picks(self) -> set[int]:
         cells = {leg.cell for legs in self.legs for leg in legs if leg.kind == Kind.PICK}
@@ -247,7 +244,7 @@ class Loop:
                     out.append(c)
         return out
 
-    def transfers(self, apply_them: bool = True) -> list[Transfer]:
+    def transfers(self) -> list[Transfer]:
         """Check every pair of robots within Manhattan distance ``d_tr`` for a load transfer.
 
         - **Relay** (equations 1 and 2): robot ``i`` carries a tile to ``x1`` (its only leg),
@@ -265,10 +262,10 @@ class Loop:
         actions it costs), walking around the other robot of the pair where it stands now: the
         two cannot pass through each other, which is what makes a transfer pay on a one-tile-wide
         segment (without it, a relay in a straight corridor never lowers the summed distance). A
-        cost that cannot be reached this way counts as ``UNREACHABLE``, so any transfer that
-        can be carried out beats robots that cannot get past each other. Robots in the middle of a relay are left alone. When several
-        transfers share a robot, the one that saves most is taken (ties: the lower robot ids),
-        then the next that shares none with it, and so on.
+        leg that cannot get around the other robot costs its free distance plus ``PASSING``
+        steps per cell between the two. Robots in the middle of a relay are left alone. When
+        several transfers share a robot, the one that saves most is taken (ties: the lower robot
+        ids), then the next that shares none with it, and so on.
         """
         m = len(self.legs)
         found: list[Transfer] = []
@@ -299,9 +296,8 @@ class Loop:
                 continue
             chosen.append(t)
             used |= {t.giver, t.taker}
-        if apply_them:
-            for t in chosen:
-                self._apply_transfer(t)
+        for t in chosen:
+            self._apply_transfer(t)
         return chosen
 
     def _relay(self, i: int, j: int) -> Transfer | None:
@@ -318,14 +314,9 @@ class Loop:
             new = d_i_x3 + p_i_x2 + p_j_x3 + d_j_x1
             if new < old and (best is None or (new, d_i_x3, x3) < best[0]):
                 best = ((new, d_i_x3, x3), x3)
-        if best is None or not self._relay_keeps_sequence(best[1]):
+        if best is None:
             return None
         return Transfer("relay", i, j, min(old, UNREACHABLE) - best[0][0], best[1])
-
-    def _relay_keeps_sequence(self, x3: int) -> bool:
-        tiles = self.state.tiles.copy()
-        tiles[x3] = True
-        return is_connected(tiles, self.instance.width, self.instance.height)
 
     def _apply_transfer(self, t: Transfer) -> None:
         i, j = t.giver, t.taker
@@ -350,11 +341,12 @@ class Loop:
         if self.goal_cells[i] >= 0:
             return walk.distances(self.goal_cells[i])
         needed = self._pending_picks()
-        feet = self.world.graphs[i].feet[self.state.poses[i]].tolist()
-        if needed.intersection(feet):
-            key = ("clear", frozenset(needed))
-            graph = self.world.graphs[i]
-            return walk.distances_to(key, lambda: np.flatnonzero(walk.standing & ~np.isin(graph.feet, list(needed)).any(axis=1)))
+        feet = self.world.graphs[i].feet
+        if needed.intersection(feet[self.state.poses[i]].tolist()):  # off the tiles still to be picked
+            def clear():
+                return np.flatnonzero(walk.standing & ~np.isin(feet, list(needed)).any(axis=1))
+
+            return walk.distances_to(("clear", frozenset(needed)), clear)
         return None
 
     def _as_lists(self, dist: np.ndarray | None):
@@ -403,20 +395,10 @@ class Loop:
         return ops
 
     def _executable(self, tiles: np.ndarray, ops) -> bool:
+        """Whether ``ops`` run in order from ``tiles``, each keeping the structure connected."""
         w, h = self.instance.width, self.instance.height
         tiles = tiles.copy()
-        for _, kind, cell, _ in ops:
-            if kind == Kind.PICK:
-                if not tiles[cell]:
-                    return False
-                tiles[cell] = False
-            else:
-                if tiles[cell]:
-                    return False
-                tiles[cell] = True
-            if not is_connected(tiles, w, h):
-                return False
-        return True
+        return all(apply_move(tiles, kind == Kind.PICK, cell, w, h) is None for _, kind, cell, _ in ops)
 
     def ready(self) -> set[int]:
         """Robots whose next pick or place could happen now as far as the tiles go: the cell
@@ -435,13 +417,10 @@ class Loop:
 
     def _allowed(self, tiles: np.ndarray, leg: Leg, rest) -> np.ndarray | None:
         """The tiles after ``leg`` if it may happen on ``tiles`` with ``rest`` still to run."""
-        if tiles[leg.cell] != (leg.kind == Kind.PICK):
-            return None
         trial = tiles.copy()
-        trial[leg.cell] = leg.kind == Kind.PLACE
-        if not is_connected(trial, self.instance.width, self.instance.height) or not self._executable(trial, rest):
+        if apply_move(trial, leg.kind == Kind.PICK, leg.cell, self.instance.width, self.instance.height):
             return None
-        return trial
+        return trial if self._executable(trial, rest) else None
 
     def manipulations(self) -> tuple[dict[int, int], dict[int, frozenset]]:
         """The picks and places that happen this step, ``{robot: action}``, and the *intents*:
@@ -504,7 +483,7 @@ class Loop:
         below: list[set[int]] = [set() for _ in range(len(order) + 1)]
         for rank in range(len(order) - 1, -1, -1):
             j = order[rank]
-            below[rank] = below[rank + 1] | self.walk(j).cells(poses[j], self.world.graphs[j].wait)
+            below[rank] = below[rank + 1] | self._cells_now(j)
         for rank, i in enumerate(order):
             walk = self.walk(i)
             dist, home = self._as_lists(goals[i])
@@ -573,7 +552,7 @@ class Loop:
 
         def stop(reason: str, status: str = "timeout"):
             self.stats["failure"] = reason
-            self._finish(step_times)
+            _timing(self.stats, step_times)
             return to_result(self.instance, method, status, None, lower_bound=bound, stats=self.stats)
 
         while not self.done():
@@ -627,14 +606,10 @@ class Loop:
             if self.motion == "mstar" and not fixed:  # the cached plan holds while it is followed
                 self._joint_key = (nxt.key(), tuple(id(g) for g in goals), ())
             self.stats["steps"] = len(self.steps)
-        self._finish(step_times)
+        _timing(self.stats, step_times)
         self.stats["final_priorities"] = list(self.Q)
         return to_result(self.instance, method, "feasible", self.steps, lower_bound=bound, stats=self.stats)
 
-    def _finish(self, step_times: list[float]) -> None:
-        if step_times:
-            self.stats["plan_ms_mean"] = round(1000 * float(np.mean(step_times)), 3)
-            self.stats["plan_ms_max"] = round(1000 * float(np.max(step_times)), 3)
 
 
 __all__ = ["Leg", "Loop", "MOTIONS", "Transfer", "plan"]

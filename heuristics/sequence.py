@@ -69,6 +69,16 @@ def sequence_of(instance: Instance) -> list[Job]:
     return jobs
 
 
+def apply_move(tiles: np.ndarray, pick: bool, cell: int, width: int, height: int) -> str | None:
+    """Pick (or place) the tile at ``cell`` in ``tiles``, in place, one move of a sequence run in
+    order. Returns the rule it breaks (``precondition``: no tile to pick, or a tile where to
+    place; ``connectivity``: the tiles after it are not one piece), or None."""
+    if tiles[cell] != pick:
+        return "precondition"
+    tiles[cell] = not pick
+    return None if is_connected(tiles, width, height) else "connectivity"
+
+
 def check(instance: Instance, jobs: list[Job], *, given: bool = False) -> None:
     """Raise :class:`SequenceError` naming the first job that breaks sequential execution, or
     that the jobs end away from the goal's tiles."""
@@ -86,18 +96,16 @@ def check(instance: Instance, jobs: list[Job], *, given: bool = False) -> None:
         if job.pick is not None:
             if obstacles[job.pick]:
                 fail(k, "the pick cell is an obstacle")
-            if not tiles[job.pick]:
-                fail(k, "the pick cell holds no tile when the task runs")
-            tiles[job.pick] = False
-            if not is_connected(tiles, w, h):
-                fail(k, "picking this tile disconnects the structure")
+            broken = apply_move(tiles, True, job.pick, w, h)
+            if broken:
+                fail(k, "the pick cell holds no tile when the task runs" if broken == "precondition"
+                     else "picking this tile disconnects the structure")
         if obstacles[job.place]:
             fail(k, "the place cell is an obstacle")
-        if tiles[job.place]:
-            fail(k, "the place cell already holds a tile when the task runs")
-        tiles[job.place] = True
-        if not is_connected(tiles, w, h):
-            fail(k, "the placed tile does not touch the structure")
+        broken = apply_move(tiles, False, job.place, w, h)
+        if broken:
+            fail(k, "the place cell already holds a tile when the task runs" if broken == "precondition"
+                 else "the placed tile does not touch the structure")
     goal = instance.goal_tiles
     if not np.array_equal(tiles, goal):
         extra = [instance.world.xy(c) for c in np.flatnonzero(tiles & ~goal)[:3]]
@@ -219,4 +227,4 @@ def _order(tiles: np.ndarray, empty: list[int], fill: list[int], graph, w: int, 
     return go(tiles.copy(), list(empty), list(fill))
 
 
-__all__ = ["Job", "SequenceError", "check", "derive", "sequence_of"]
+__all__ = ["Job", "SequenceError", "apply_move", "check", "derive", "sequence_of"]

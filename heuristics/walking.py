@@ -60,19 +60,16 @@ class Walk:
         if out is None:
             g, row = self.graph, self.succ[pose]
             order = [self.wait] + [a for a in range(len(row)) if a != self.wait]
-            out = [(a, int(row[a]), self._cells(pose, a)) for a in order if row[a] >= 0]
+            out = [(a, int(row[a]), self.cells(pose, a)) for a in order if row[a] >= 0]
             self._moves[pose] = out
         return out
-
-    def _cells(self, pose: int, action: int) -> frozenset:
-        g = self.graph
-        cells = g.coll[pose, action].tolist() + (g.carry[pose, action].tolist() if self.carrying else [])
-        return frozenset(c for c in cells if c >= 0)
 
     def cells(self, pose: int, action: int) -> frozenset:
         """The collision set of ``action`` from ``pose`` (with the carried tile's cells when
         this walk carries one); also for pick and place, which :meth:`moves` leaves out."""
-        return self._cells(pose, action)
+        g = self.graph
+        cells = g.coll[pose, action].tolist() + (g.carry[pose, action].tolist() if self.carrying else [])
+        return frozenset(c for c in cells if c >= 0)
 
     # ---- distances ----------------------------------------------------------------------------
 
