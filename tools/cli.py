@@ -365,9 +365,12 @@ def _record(traces, path, *, spawn: bool = False, quiet: bool = False) -> None:
 
 
 def _register_gen() -> None:
+    from .execute.commands import robot_sim, run
     from .gen import gen
 
     cli.add_command(gen)
+    cli.add_command(run)
+    cli.add_command(robot_sim)
 
 
 _register_gen()
@@ -525,3 +528,7 @@ def main(argv: list[str] | None = None) -> int:
     except BrokenPipeError:
         code = EXIT_OK
     sys.exit(code if isinstance(code, int) else EXIT_OK)
+
+
+if __name__ == "__main__":
+    main()
