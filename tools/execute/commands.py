@@ -69,6 +69,8 @@ class _Progress:
 @click.option("--replan-method", default="temporal-astar", show_default=True, help="Planner for --on-fault replan.")
 @click.option("--reconnect-timeout", type=click.FloatRange(min=0.1), default=30.0, show_default=True,
               help="Seconds a retry waits for a lost robot to answer again.")
+@click.option("--connect-timeout", type=click.FloatRange(min=0.1), default=30.0, show_default=True,
+              help="Seconds the robots may take to answer at the start.")
 @click.option("--window", type=click.IntRange(min=1), default=5, show_default=True,
               help="Steps per order: the released step and the horizon after it.")
 @click.option("--sim-fault-rate", type=click.FloatRange(0, 1), default=0.0, help="Simulated robots: chance per step of "
@@ -77,7 +79,7 @@ class _Progress:
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of the simulated robots' faults.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of text.")
 def run(instance, schedule, journal_in, broker, robots, secrets_path, fleet, journal, step_timeout, on_fault, retries,
-        replan_method, reconnect_timeout, window, sim_fault_rate, sim_delay, seed, as_json) -> int:
+        replan_method, reconnect_timeout, connect_timeout, window, sim_fault_rate, sim_delay, seed, as_json) -> int:
     """Execute SCHEDULE of INSTANCE on robots over MQTT, one synchronized step at a time.
 
     Exit 0 when the robots reached the goal, 1 when the run stopped safely after a fault (resume
@@ -92,7 +94,7 @@ def run(instance, schedule, journal_in, broker, robots, secrets_path, fleet, jou
     if replan_method not in METHODS:
         raise ExecutionError(f"--replan-method: unknown method {replan_method!r} (expected one of: {', '.join(METHODS)})")
     settings = dict(step_timeout=step_timeout, on_fault=on_fault, retries=retries, replan_method=replan_method,
-                    reconnect_timeout=reconnect_timeout, window=window)
+                    reconnect_timeout=reconnect_timeout, connect_timeout=connect_timeout, window=window)
     sims = session.SimOptions(fault_rate=sim_fault_rate, delay_ms=sim_delay, seed=seed)
     _quiet_logs(as_json)
     if journal_in:

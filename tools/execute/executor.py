@@ -28,7 +28,7 @@ import numpy as np
 from bille.instances import BilleError, Instance, Robot, dump_instance
 from bille.instances.grid import Grid
 from bille.instances.rules import State, Violation, apply
-from bille.solvers import Schedule, save_schedule, solve, validate
+from bille.solvers import Schedule, bind, save_schedule, solve
 
 from .broker import BrokerURL, close, connect
 from .journal import Journal, Replayed, plan_states, sha256_file
@@ -54,6 +54,7 @@ class Settings:
     replan_method: str = "temporal-astar"
     replan_time_limit: float = 60.0
     reconnect_timeout: float = 30.0  # how long ``retry`` waits for a lost robot to answer again
+    connect_timeout: float = 30.0  # how long the robots may take to answer at the start
 
 
 @dataclass
@@ -224,7 +225,7 @@ class Executor:
         journal cannot explain.
         """
         robots = self.s.robots
-        timeout = timeout or self.s.step_timeout
+        timeout = timeout or self.s.connect_timeout
         self.request_state(robots)
         silent = self.wait_for(robots, lambda rep: True, timeout)
         if silent:
@@ -333,15 +334,20 @@ class Executor:
             if fault.kind in ("mismatch", "rejected") or self.s.on_fault == "stop" or attempts > self.s.retries:
                 status = "stopped"
                 break
-            if not self.recover(k, fault):
+            nxt = self.recover(k, fault)
+            if nxt is None:
                 status = "stopped"
                 break
+            k = nxt
         if status == "completed":
             self.journal.write("done", step=self.length)
         return self.outcome(status, k - 1, time.perf_counter() - start)
 
-    def recover(self, k: int, fault: Fault) -> bool:
-        """Bring the robots back to the state after step ``k - 1`` and (for ``replan``) plan again."""
+    def recover(self, k: int, fault: Fault) -> int | None:
+        """Bring the robots back to the state after step ``k - 1`` and (for ``replan``) plan again.
+
+        Returns the step to release next, or None when the run must stop.
+        """
         robots = self.s.robots
         self.connection = {r: s for r, s in self.connection.items() if s == "ONLINE"}
         self.reports = {r: rep for r, rep in self.reports.items() if r != fault.robot}
@@ -349,33 +355,51 @@ class Executor:
             self.bring_up(k - 1, k, self.s.reconnect_timeout)
         except ExecutionError as exc:
             log.warning("recovery of step %d failed: %s", k, exc)
-            return False
-        if any(self.reports[r]["lastStep"] == k for r in robots) or self.s.on_fault != "replan":
-            return True  # part of the step is done: release it again as it is
-        return self.replan(k - 1)
+            return None
+        if self.s.on_fault != "replan":
+            return k
+        done = [i for i, r in enumerate(robots) if self.reports[r]["lastStep"] == k]
+        if not self.replan(k, done):
+            return None
+        if not done:
+            return k
+        # the robots' copies of the world took in the whole step: give them the world as it is
+        self.request_state([r for r in robots], self.initialize_params(k), kind="initialize")
+        if self.wait_for(robots, lambda rep: rep["lastStep"] == k and self.matches(robots.index(rep["robot"]), rep, k),
+                         self.s.step_timeout):
+            return None
+        self.journal.write("finished", step=k)
+        return k + 1
 
-    def replan(self, step: int) -> bool:
-        """Plan the steps after ``step`` from the state reached, with the chosen method."""
-        st = self.states[step]
-        inst = self.instance
-        grid = Grid.from_masks(inst.width, inst.height, inst.start.obstacles, st.tiles)
-        robots = []
-        for i, r in enumerate(inst.robots):
-            feet = self.world.graphs[i].feet_xy(st.poses[i])
-            robots.append(Robot(feet[0], feet[1] if len(feet) > 1 else None, bool(st.carrying[i]), r.moveset))
-        now_inst = Instance(f"{inst.name}-from-{step}", inst.moveset, grid, tuple(robots), inst.goal_grid,
-                            inst.robot_goals, None, None)
-        result = solve(now_inst, self.s.replan_method, time_limit=self.s.replan_time_limit)
-        if result.schedule is None or not validate(now_inst, result.schedule).valid:
-            log.warning("re-planning from step %d with %s found no schedule (%s)", step, self.s.replan_method, result.status)
+    def replan(self, k: int, done: list[int]) -> bool:
+        """Plan from the state the robots report, with the chosen method.
+
+        If robots ``done`` finished step ``k`` and the others did not, step ``k`` becomes what
+        happened (the others wait) and the plan goes on after it; otherwise after step ``k - 1``.
+        """
+        inst, prefix = self.instance, self.plan[:, : k - 1]
+        st = self.states[k - 1]
+        if done:
+            for r in self.s.robots:
+                self.reports.pop(r, None)
+            step = np.array([self.plan[i, k - 1] if i in done else inst.movesets[i].wait for i in range(inst.num_robots)])
+            st = apply(self.world, st, step, step=k)
+            if isinstance(st, Violation):
+                log.warning("cannot re-plan: step %d done by only some robots breaks the rules: %s", k, st.message)
+                return False
+            prefix = np.concatenate([prefix, step[:, None]], axis=1)
+        result = solve(_instance_at(inst, st, f"{inst.name}-from-{prefix.shape[1]}"), self.s.replan_method,
+                       time_limit=self.s.replan_time_limit)
+        if result.schedule is None:
+            log.warning("re-planning from step %d with %s found no schedule (%s)", prefix.shape[1],
+                        self.s.replan_method, result.status)
             return False
-        path = self.journal.path.with_name(f"{self.journal.path.name}.replan-{step}.schedule.yaml")
-        save_schedule(result.schedule, path)
-        tail = np.array([[inst.movesets[i].index[a] for a in row] for i, row in enumerate(result.schedule.actions)],
-                        dtype=np.int64).reshape(inst.num_robots, -1)
-        plan = np.concatenate([self.plan[:, :step], tail], axis=1)
-        self.set_plan(plan, self.states[: step + 1] + plan_states(inst, tail, "the re-planned schedule", st)[1:])
-        self.journal.write("replan", step=step, schedule=str(path), schedule_sha256=sha256_file(path),
+        tail = np.concatenate([prefix[:, k - 1:], bind(inst, result.schedule)], axis=1)
+        path = self.journal.path.with_name(f"{self.journal.path.name}.replan-{k - 1}.schedule.yaml")
+        save_schedule(Schedule.from_ids(inst, tail), path)
+        plan = np.concatenate([self.plan[:, : k - 1], tail], axis=1)
+        self.set_plan(plan, self.states[:k] + plan_states(inst, tail, "the re-planned schedule", self.states[k - 1])[1:])
+        self.journal.write("replan", step=k - 1, schedule=str(path), schedule_sha256=sha256_file(path),
                            method=self.s.replan_method, steps=int(tail.shape[1]))
         return True
 
@@ -389,6 +413,16 @@ class Executor:
         counters = {r: self.reports[r]["counters"] for r in self.s.robots if r in self.reports}
         return Outcome(status, self.length, finished, seconds, self.round_trips, self.faults,
                        self.gate.duplicates, self.gate.rejected, worlds, counters)
+
+
+def _instance_at(inst: Instance, st: State, name: str) -> Instance:
+    """The instance of reaching ``inst``'s goal from state ``st`` (tiles, poses, loads)."""
+    grid = Grid.from_masks(inst.width, inst.height, inst.start.obstacles, st.tiles)
+    robots = []
+    for i, r in enumerate(inst.robots):
+        feet = inst.world.graphs[i].feet_xy(st.poses[i])
+        robots.append(Robot(feet[0], feet[1] if len(feet) > 1 else None, bool(st.carrying[i]), r.moveset))
+    return Instance(name, inst.moveset, grid, tuple(robots), inst.goal_grid, inst.robot_goals)
 
 
 def run_plan(instance: Instance, plan: np.ndarray, settings: Settings, journal: Journal, *,
