@@ -55,8 +55,11 @@ def embedded():
 
 @pytest.fixture(scope="module")
 def mosquitto(tmp_path_factory):
-    """A mosquitto broker on a free loopback port (``.ci/run`` installs it; there its absence is
-    a failure, not a skip)."""
+    """A mosquitto broker on a free loopback port: the one ``.ci/run`` starts (there its absence
+    is a failure, not a skip), or one started here."""
+    if os.environ.get("BILLE_TEST_MOSQUITTO"):
+        yield os.environ["BILLE_TEST_MOSQUITTO"]
+        return
     exe = shutil.which("mosquitto") or next((p for p in ("/usr/sbin/mosquitto",) if os.path.exists(p)), None)
     if exe is None:
         if os.environ.get("BILLE_REQUIRE_MOSQUITTO"):

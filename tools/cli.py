@@ -396,6 +396,28 @@ def bench_core(size: int, robots: int, steps: int, compile_size: int, seed: int)
     return EXIT_OK
 
 
+@bench.command("execute")
+@click.option("--robots", "sizes", default="10,50", show_default=True, help="Comma-separated fleet sizes (1 is the baseline).")
+@click.option("--steps", type=click.IntRange(2, 100_000), default=200, show_default=True)
+@click.option("--broker", metavar="URL", help="mqtt://host:port (default: the embedded broker).")
+def bench_execute(sizes: str, steps: int, broker: str | None) -> int:
+    """Steps per second and round-trip latency of the execution layer with simulated robots."""
+    from .bench_execute import report
+    from .execute.broker import parse_url
+
+    try:
+        counts = sorted({int(s) for s in sizes.split(",") if s.strip()})
+    except ValueError:
+        raise click.BadParameter(f"{sizes!r}: expected numbers like 10,50", param_hint="--robots") from None
+    if not counts or counts[0] < 1:
+        raise click.BadParameter(f"{sizes!r}: fleet sizes must be at least 1", param_hint="--robots")
+    if broker:
+        parse_url(broker)
+    for line in report(counts, steps, broker):
+        click.echo(line)
+    return EXIT_OK
+
+
 @bench.command("planners")
 @click.option("--time-limit", type=click.FloatRange(min=0.1), default=60.0, show_default=True, help="Seconds per run.")
 @click.option("--jobs", "-j", type=click.IntRange(min=1), default=None, help="Parallel processes (default: CPUs).")

@@ -70,6 +70,10 @@ class EmbeddedBroker:
 
         asyncio.set_event_loop(self._loop)
         logging.getLogger("amqtt").setLevel(logging.CRITICAL)  # it logs every connection at INFO
+        # a client session that fails inside amqtt ends that connection only (the client
+        # reconnects); keep its traceback out of the user's terminal
+        self._loop.set_exception_handler(lambda loop, context: logging.getLogger("bille.broker").debug(
+            "embedded broker: %s", context.get("message")))
 
         async def start():
             config = {
@@ -115,10 +119,13 @@ class EmbeddedBroker:
 
 
 def connect(url: BrokerURL, client_id: str, *, will: tuple[str, bytes] | None = None,
-            on_message=None, keepalive: int = 10, timeout: float = 5.0) -> mqtt.Client:
-    """A connected paho client with its network loop running in a thread.
+            on_message=None, on_connected=None, on_disconnected=None, keepalive: int = 10,
+            timeout: float = 5.0) -> mqtt.Client:
+    """A connected paho client with its network loop running in a thread; it reconnects by itself.
 
     ``will`` is ``(topic, payload)``, published retained by the broker if the connection breaks.
+    ``on_connected(client)`` runs after every (re)connection (subscribe there: a clean session
+    forgets subscriptions), ``on_disconnected(client)`` after every loss, before reconnecting.
     Raises :class:`ExecutionError` when the broker cannot be reached.
     """
     client = mqtt.Client(mqtt.CallbackAPIVersion.VERSION2, client_id=client_id, clean_session=True)
@@ -127,7 +134,15 @@ def connect(url: BrokerURL, client_id: str, *, will: tuple[str, bytes] | None = 
     if on_message is not None:
         client.on_message = on_message
     connected = threading.Event()
-    client.on_connect = lambda c, u, flags, rc, props=None: connected.set()
+
+    def connected_now(c, userdata, flags, reason, props=None):
+        if on_connected is not None:
+            on_connected(c)
+        connected.set()
+
+    client.on_connect = connected_now
+    if on_disconnected is not None:
+        client.on_disconnect = lambda c, userdata, flags, reason, props=None: on_disconnected(c)
     try:
         client.connect(url.host, url.port, keepalive=keepalive)
     except (OSError, ValueError) as exc:

@@ -125,6 +125,7 @@ class Executor:
 
     def set_plan(self, plan: np.ndarray, states: list[State]) -> None:
         self.plan, self.states = plan, states
+        self._digests: dict[bytes, dict] = {}  # tile digest of the last tile set asked for
         self.names = [[ms.actions[a].name for a in row] for ms, row in zip(self.instance.movesets, plan.tolist())]
 
     @property
@@ -134,10 +135,10 @@ class Executor:
     # ---- messages -----------------------------------------------------------------------------
 
     def connect(self) -> None:
-        self.client = connect(self.s.url, f"bille-executor-{self.s.fleet}-{self.run_id}",
-                              on_message=lambda c, u, m: self.inbox.put((m.topic, m.payload, time.perf_counter())))
         subs = [(topic(self.s.fleet, r, kind), 1) for r in self.s.robots for kind in ("state", "connection")]
-        self.client.subscribe(subs)
+        self.client = connect(self.s.url, f"bille-executor-{self.s.fleet}-{self.run_id}",
+                              on_message=lambda c, u, m: self.inbox.put((m.topic, m.payload, time.perf_counter())),
+                              on_connected=lambda c: c.subscribe(subs))
 
     def close(self) -> None:
         if self.client is not None:
@@ -179,22 +180,32 @@ class Executor:
                 {"actionId": f"{self.run_id}-{kind}-{self.updates}", "actionType": kind, "parameters": params(r) if params else {}}]})
         self.updates += 1
 
-    def wait_for(self, robots, ok: Callable[[dict], bool], timeout: float) -> list[str]:
-        """Wait until ``ok(report)`` holds for every robot; the robots for which it does not."""
+    def wait_for(self, robots, ok: Callable[[dict], bool], timeout: float, resend=None) -> list[str]:
+        """Wait until ``ok(report)`` holds for every robot; the robots for which it does not.
+
+        ``resend(missing)`` repeats a request every second (a robot may not have listened yet).
+        """
         end = time.perf_counter() + timeout
+        again = time.perf_counter() + 1.0
         while True:
             missing = [r for r in robots if r not in self.reports or not ok(self.reports[r])]
             if not missing or time.perf_counter() >= end:
                 return missing
+            if resend is not None and time.perf_counter() >= again:
+                resend(missing)
+                again = time.perf_counter() + 1.0
             self.pump(min(0.05, end - time.perf_counter()))
 
     # ---- the world in messages ----------------------------------------------------------------
 
     def expected(self, i: int, k: int) -> dict:
         st = self.states[k]
-        cells = tile_cells(st.tiles, self.world.width)
+        key = st.tiles.tobytes()
+        if key not in self._digests:
+            cells = tile_cells(st.tiles, self.world.width)
+            self._digests = {key: {"count": len(cells), "digest": tiles_digest(map(tuple, cells))}}
         return {"pose": pose_json(self.world.graphs[i], st.poses[i]), "carrying": bool(st.carrying[i]),
-                "tiles": {"count": len(cells), "digest": tiles_digest(map(tuple, cells))}}
+                "tiles": self._digests[key]}
 
     def matches(self, i: int, report: dict, k: int) -> bool:
         exp = self.expected(i, k)
@@ -227,7 +238,7 @@ class Executor:
         robots = self.s.robots
         timeout = timeout or self.s.connect_timeout
         self.request_state(robots)
-        silent = self.wait_for(robots, lambda rep: True, timeout)
+        silent = self.wait_for(robots, lambda rep: True, timeout, self.request_state)
         if silent:
             raise ExecutionError(f"robot{'s' if len(silent) > 1 else ''} {', '.join(silent)} did not answer within "
                                  f"{timeout:g} s on {self.s.url} (fleet {self.s.fleet}): not running, an "
@@ -237,9 +248,10 @@ class Executor:
         if fresh:
             for r in fresh:
                 self.reports.pop(r, None)
-            self.request_state(fresh, self.initialize_params(finished), kind="initialize")
+            params = self.initialize_params(finished)
+            self.request_state(fresh, params, kind="initialize")
             silent = self.wait_for(fresh, lambda rep: rep["initialized"] and rep["lastStep"] == finished,
-                                   self.s.step_timeout)
+                                   self.s.connect_timeout, lambda missing: self.request_state(missing, params, "initialize"))
             if silent:
                 errors = "; ".join(e["errorDescription"] for r in silent for e in self.reports.get(r, {}).get("errors", []))
                 raise ExecutionError(f"robot {silent[0]} was not initialized within {self.s.step_timeout:g} s"

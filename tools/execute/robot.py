@@ -84,13 +84,25 @@ class SimRobot:
         return topic(self.fleet, self.id, kind)
 
     def start(self) -> None:
-        online = self.sealer.seal("connection", {"connectionState": "ONLINE"})
-        will = self.sealer.seal("connection", {"connectionState": "CONNECTIONBROKEN"})
-        self.client = connect(self.url, f"bille-robot-{self.fleet}-{self.id}", will=(self._topic("connection"), will),
-                              on_message=lambda c, u, m: self.inbox.put((m.topic, m.payload)))
-        self.client.subscribe([(self._topic("order"), 1), (self._topic("instantActions"), 1)])
-        self.client.publish(self._topic("connection"), online, qos=1, retain=True)
-        self.report()
+        self._announce()
+        self.client = connect(self.url, f"bille-robot-{self.fleet}-{self.id}", will=(self._topic("connection"), self.will),
+                              on_message=lambda c, u, m: self.inbox.put((m.topic, m.payload)),
+                              on_connected=self._connected, on_disconnected=self._disconnected)
+
+    def _announce(self) -> None:
+        # ONLINE, then the last will with the next headerId: a broken connection is news
+        self.online = self.sealer.seal("connection", {"connectionState": "ONLINE"})
+        self.will = self.sealer.seal("connection", {"connectionState": "CONNECTIONBROKEN"})
+
+    def _connected(self, client) -> None:
+        client.subscribe([(self._topic("order"), 1), (self._topic("instantActions"), 1)])
+        client.publish(self._topic("connection"), self.online, qos=1, retain=True)
+        self.inbox.put(("report", b""))  # tell whoever listens where this robot is
+
+    def _disconnected(self, client) -> None:
+        if self.running:  # the broker may have sent our will: announce anew on reconnection
+            self._announce()
+            client.will_set(self._topic("connection"), self.will, qos=1, retain=True)
 
     def stop(self) -> None:
         if self.client is not None:
@@ -115,6 +127,9 @@ class SimRobot:
     # ---- messages -----------------------------------------------------------------------------
 
     def handle(self, name: str, payload: bytes) -> None:
+        if name == "report":
+            self.report()
+            return
         parsed = parse_topic(name)
         if parsed != (self.fleet, self.id, "order") and parsed != (self.fleet, self.id, "instantActions"):
             return  # not addressed to this robot (a broker may deliver retained messages of other topics)
