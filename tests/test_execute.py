@@ -383,3 +383,15 @@ def test_the_command_line_runs_and_resumes_a_stopped_run(tmp_path):
     assert summary["status"] == "completed" and summary["worlds_match_goal"] and summary["steps_per_second"] > 0
     again = bille("run", "--resume", "j.jsonl", cwd=tmp_path)
     assert again.returncode == 2 and "the run is complete" in again.stderr
+
+
+def test_the_documented_messages_validate_and_their_signatures_verify():
+    import re
+
+    doc = (Path(__file__).parent.parent / "docs" / "execution.md").read_text()
+    blocks = re.findall(r"```json (\w+)\n(.*?)```", doc, re.S)
+    assert sorted(kind for kind, _ in blocks) == sorted(["order", "instantActions", "state", "connection"])
+    for kind, text in blocks:
+        msg = json.loads(text)
+        gate = Gate({msg["robot"]: b"example-secret"})
+        assert isinstance(gate.admit(msg["robot"], kind, text.encode()), dict), kind
