@@ -152,6 +152,17 @@ def test_replan_continues_from_the_reported_state(case, tmp_path, embedded):
     assert_journal_sound(journal, inst)
 
 
+def test_a_stopped_run_resumes_with_a_new_plan(case, tmp_path, embedded):
+    inst = case[0]
+    out, journal = start(case, tmp_path, embedded, extra={0: ["--fail-at", "5"], 1: ["--fail-at", "5"]})
+    assert out.status == "stopped" and out.finished == 4
+    again = session.resume(str(journal), broker=embedded, secrets_path=None, settings=FAST, replan=True)
+    assert again.status == "completed" and again.worlds_match
+    replans = [e for e in read_events(journal) if e["event"] == "replan"]
+    assert [e["step"] for e in replans] == [4]  # nobody did step 5: the new plan starts after step 4
+    assert_journal_sound(journal, inst)
+
+
 def test_a_dropped_report_is_recovered_by_a_state_request(case, tmp_path, embedded):
     out, journal = start(case, tmp_path, embedded, extra={0: ["--drop-at", "5"]})
     assert out.status == "completed" and out.worlds_match and not out.faults

@@ -53,8 +53,12 @@ class _Progress:
 @click.argument("schedule", required=False)
 @click.option("--resume", "journal_in", type=click.Path(dir_okay=False), metavar="JOURNAL",
               help="Continue the run of this journal (INSTANCE and SCHEDULE come from it).")
+@click.option("--replan", is_flag=True, help="With --resume: plan the rest again (--replan-method) from the "
+                                             "robots' reported state instead of retrying the step.")
 @click.option("--broker", metavar="URL", help="mqtt://host:port of an external broker (default: an embedded "
                                               "broker on a free loopback port).")
+@click.option("--bind", default="127.0.0.1", show_default=True, metavar="HOST",
+              help="Address the embedded broker listens on.")
 @click.option("--robots", default="sim", show_default=True, metavar="sim|sim:N|ID,ID,...",
               help="Simulated robot processes, or the ids of running robots in schedule order.")
 @click.option("--secrets", "secrets_path", type=click.Path(dir_okay=False), metavar="FILE",
@@ -66,7 +70,7 @@ class _Progress:
 @click.option("--on-fault", type=click.Choice(POLICIES), default="stop", show_default=True,
               help="stop and report; retry the step; or re-plan from the reported state.")
 @click.option("--retries", type=click.IntRange(min=0), default=2, show_default=True, help="Recoveries per step.")
-@click.option("--replan-method", default="temporal-astar", show_default=True, help="Planner for --on-fault replan.")
+@click.option("--replan-method", default="temporal-astar", show_default=True, help="Planner for --on-fault replan and --replan.")
 @click.option("--reconnect-timeout", type=click.FloatRange(min=0.1), default=30.0, show_default=True,
               help="Seconds a retry waits for a lost robot to answer again.")
 @click.option("--connect-timeout", type=click.FloatRange(min=0.1), default=30.0, show_default=True,
@@ -78,8 +82,9 @@ class _Progress:
 @click.option("--sim-delay", type=click.FloatRange(min=0), default=0.0, metavar="MS", help="Simulated robots: report delay.")
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of the simulated robots' faults.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of text.")
-def run(instance, schedule, journal_in, broker, robots, secrets_path, fleet, journal, step_timeout, on_fault, retries,
-        replan_method, reconnect_timeout, connect_timeout, window, sim_fault_rate, sim_delay, seed, as_json) -> int:
+def run(instance, schedule, journal_in, replan, broker, bind, robots, secrets_path, fleet, journal, step_timeout,
+        on_fault, retries, replan_method, reconnect_timeout, connect_timeout, window, sim_fault_rate, sim_delay, seed,
+        as_json) -> int:
     """Execute SCHEDULE of INSTANCE on robots over MQTT, one synchronized step at a time.
 
     Exit 0 when the robots reached the goal, 1 when the run stopped safely after a fault (resume
@@ -104,10 +109,12 @@ def run(instance, schedule, journal_in, broker, robots, secrets_path, fleet, jou
         total = session.replay(path).plan.shape[1]
         with _Progress(not as_json and sys.stderr.isatty(), total) as bar:
             out = session.resume(journal_in, broker=broker, secrets_path=secrets_path, settings=settings, sims=sims,
-                                 progress=bar)
+                                 replan=replan, host=bind, progress=bar)
     else:
         if not instance or not schedule:
             raise click.UsageError("missing INSTANCE and SCHEDULE (or --resume JOURNAL)")
+        if replan:
+            raise click.UsageError("--replan goes with --resume JOURNAL")
         inst_path, sched_path = resolve(instance, InstanceError), resolve(schedule, ScheduleError)
         inst, sched = load_instance(inst_path), load_schedule(sched_path)
         path = Path(journal or f"{inst.name}-{datetime.now():%Y%m%d-%H%M%S}.journal.jsonl")
@@ -115,7 +122,7 @@ def run(instance, schedule, journal_in, broker, robots, secrets_path, fleet, jou
         with _Progress(not as_json and sys.stderr.isatty(), sched.length) as bar:
             out = session.start(inst, str(inst_path), sched, str(sched_path), broker=broker, robots=robots,
                                 secrets_path=secrets_path, journal_path=str(path), settings=settings, sims=sims,
-                                progress=bar)
+                                host=bind, progress=bar)
     if as_json:
         click.echo(dumps(out))
     else:

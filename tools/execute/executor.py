@@ -76,6 +76,7 @@ class Outcome:
     steps: int
     finished: int
     seconds: float
+    executed: int = 0  # steps finished by this executor (a resumed run starts after the journal's)
     round_trips: list[float] = field(default_factory=list)
     faults: list[Fault] = field(default_factory=list)
     duplicates: int = 0
@@ -90,9 +91,9 @@ class Outcome:
             ms = {"mean": 1000 * statistics.fmean(rt), "p50": 1000 * rt[len(rt) // 2],
                   "p95": 1000 * rt[min(len(rt) - 1, int(0.95 * len(rt)))], "max": 1000 * rt[-1]}
         return {
-            "status": self.status, "steps": self.steps, "finished": self.finished,
+            "status": self.status, "steps": self.steps, "finished": self.finished, "executed": self.executed,
             "seconds": round(self.seconds, 3),
-            "steps_per_second": round(self.finished / self.seconds, 2) if self.seconds > 0 else None,
+            "steps_per_second": round(self.executed / self.seconds, 2) if self.seconds > 0 else None,
             "round_trip_ms": {k: round(v, 2) for k, v in ms.items()},
             "faults": [str(f) for f in self.faults], "duplicates": self.duplicates, "rejected": self.rejected,
             "worlds_match_goal": self.worlds_match, "robot_counters": self.robot_counters,
@@ -177,7 +178,8 @@ class Executor:
     def request_state(self, robots, params=None, kind="stateRequest") -> None:
         for r in robots:
             self.send(r, "instantActions", {"actions": [
-                {"actionId": f"{self.run_id}-{kind}-{self.updates}", "actionType": kind, "parameters": params(r) if params else {}}]})
+                {"actionId": f"{self.run_id}-{kind}-{self.updates}", "actionType": kind,
+                 "parameters": params(r) if params else {}}]})
         self.updates += 1
 
     def wait_for(self, robots, ok: Callable[[dict], bool], timeout: float, resend=None) -> list[str]:
@@ -254,7 +256,7 @@ class Executor:
                                    self.s.connect_timeout, lambda missing: self.request_state(missing, params, "initialize"))
             if silent:
                 errors = "; ".join(e["errorDescription"] for r in silent for e in self.reports.get(r, {}).get("errors", []))
-                raise ExecutionError(f"robot {silent[0]} was not initialized within {self.s.step_timeout:g} s"
+                raise ExecutionError(f"robot {silent[0]} was not initialized within {self.s.connect_timeout:g} s"
                                      + (f": {errors}" if errors else ""))
         for i, r in enumerate(robots):
             last = self.reports[r]["lastStep"]
@@ -353,7 +355,7 @@ class Executor:
             k = nxt
         if status == "completed":
             self.journal.write("done", step=self.length)
-        return self.outcome(status, k - 1, time.perf_counter() - start)
+        return self.outcome(status, k - 1, time.perf_counter() - start, k - first)
 
     def recover(self, k: int, fault: Fault) -> int | None:
         """Bring the robots back to the state after step ``k - 1`` and (for ``replan``) plan again.
@@ -368,15 +370,19 @@ class Executor:
         except ExecutionError as exc:
             log.warning("recovery of step %d failed: %s", k, exc)
             return None
-        if self.s.on_fault != "replan":
-            return k
+        return self.replan_at(k) if self.s.on_fault == "replan" else k
+
+    def replan_at(self, k: int) -> int | None:
+        """Re-plan before releasing step ``k`` (robots at step ``k - 1``, some perhaps at ``k``);
+        the step to release next, or None."""
+        robots = self.s.robots
         done = [i for i, r in enumerate(robots) if self.reports[r]["lastStep"] == k]
         if not self.replan(k, done):
             return None
         if not done:
             return k
         # the robots' copies of the world took in the whole step: give them the world as it is
-        self.request_state([r for r in robots], self.initialize_params(k), kind="initialize")
+        self.request_state(robots, self.initialize_params(k), kind="initialize")
         if self.wait_for(robots, lambda rep: rep["lastStep"] == k and self.matches(robots.index(rep["robot"]), rep, k),
                          self.s.step_timeout):
             return None
@@ -402,7 +408,7 @@ class Executor:
             prefix = np.concatenate([prefix, step[:, None]], axis=1)
         result = solve(_instance_at(inst, st, f"{inst.name}-from-{prefix.shape[1]}"), self.s.replan_method,
                        time_limit=self.s.replan_time_limit)
-        if result.schedule is None:
+        if result.schedule is None or result.status not in ("optimal", "feasible"):
             log.warning("re-planning from step %d with %s found no schedule (%s)", prefix.shape[1],
                         self.s.replan_method, result.status)
             return False
@@ -415,7 +421,7 @@ class Executor:
                            method=self.s.replan_method, steps=int(tail.shape[1]))
         return True
 
-    def outcome(self, status: str, finished: int, seconds: float) -> Outcome:
+    def outcome(self, status: str, finished: int, seconds: float, executed: int = 0) -> Outcome:
         self.request_state(self.s.robots)
         self.wait_for(self.s.robots, lambda rep: rep["lastStep"] >= finished, self.s.step_timeout)
         worlds = status == "completed" and all(
@@ -423,7 +429,7 @@ class Executor:
         goal = self.states[self.length]
         worlds = worlds and bool(np.array_equal(goal.tiles, self.instance.goal_tiles))
         counters = {r: self.reports[r]["counters"] for r in self.s.robots if r in self.reports}
-        return Outcome(status, self.length, finished, seconds, self.round_trips, self.faults,
+        return Outcome(status, self.length, finished, seconds, executed, self.round_trips, self.faults,
                        self.gate.duplicates, self.gate.rejected, worlds, counters)
 
 
@@ -438,15 +444,23 @@ def _instance_at(inst: Instance, st: State, name: str) -> Instance:
 
 
 def run_plan(instance: Instance, plan: np.ndarray, settings: Settings, journal: Journal, *,
-             replayed: Replayed | None = None, progress=None) -> Outcome:
-    """Connect, bring the robots up (fresh or from a journal), execute, and disconnect."""
+             replayed: Replayed | None = None, replan: bool = False, progress=None) -> Outcome:
+    """Connect, bring the robots up (fresh or from a journal), execute, and disconnect.
+
+    ``replan``: plan the rest again (``settings.replan_method``) from the state the robots report
+    before releasing anything.
+    """
     ex = Executor(instance, replayed.plan if replayed else plan, settings, journal, progress)
     ex.connect()
     try:
         finished = replayed.finished if replayed else 0
         # a step in flight when the executor stopped is released again: robots that did it skip it
         ex.bring_up(finished, replayed.released if replayed else 0)
-        return ex.execute(finished + 1)
+        first = ex.replan_at(finished + 1) if replan else finished + 1
+        if first is None:
+            ex.faults.append(Fault(finished + 1, "-", "replan", f"{settings.replan_method} found no schedule"))
+            return ex.outcome("stopped", finished, 0.0)
+        return ex.execute(first)
     finally:
         ex.close()
 
@@ -472,7 +486,8 @@ def load_secrets(path: str | Path, robots: list[str]) -> dict[str, bytes]:
 
 def summary_lines(out: Outcome, journal: Path) -> list[str]:
     j = out.to_json()
-    lines = [f"{out.status}: {out.finished} of {out.steps} steps in {j['seconds']:.2f} s "
+    resumed = f" ({out.executed} in this run)" if out.executed != out.finished else ""
+    lines = [f"{out.status}: {out.finished} of {out.steps} steps{resumed} in {j['seconds']:.2f} s "
              f"({j['steps_per_second'] or 0:.1f} steps/s)"]
     if j["round_trip_ms"]:
         rt = j["round_trip_ms"]
@@ -483,8 +498,8 @@ def summary_lines(out: Outcome, journal: Path) -> list[str]:
     for f in out.faults:
         lines.append(f"fault: {f}")
     if out.status == "stopped":
-        lines.append(f"all robots hold after step {out.finished}. Continue with: bille run --resume {journal} "
-                     "[--on-fault retry | --on-fault replan --replan-method METHOD]")
+        lines.append(f"all robots hold after step {out.finished}. Retry the step with: bille run --resume {journal}; "
+                     f"or re-plan from here: bille run --resume {journal} --replan --replan-method METHOD")
     lines.append(f"journal: {journal}")
     return lines
 

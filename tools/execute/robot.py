@@ -161,6 +161,8 @@ class SimRobot:
                 raise BilleError(f"pose {params['pose']} is not a valid pose")
             tiles = np.zeros(inst.width * inst.height, dtype=bool)
             for x, y in params["tiles"]:
+                if not (0 <= x < inst.width and 0 <= y < inst.height):
+                    raise ValueError(f"tile [{x}, {y}] is outside the {inst.width}x{inst.height} grid")
                 tiles[y * inst.width + x] = True
         except (BilleError, KeyError, IndexError, TypeError, ValueError) as exc:
             self.errors = [{"errorType": "initializeFailed", "errorDescription": str(exc)}]

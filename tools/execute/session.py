@@ -91,18 +91,18 @@ def simulated(robots: list[str], url: BrokerURL, fleet: str, opts: SimOptions):
 
 
 @contextmanager
-def broker_at(url: str | None):
-    """The broker to use: the given URL, or an embedded one on a free loopback port."""
+def broker_at(url: str | None, host: str = "127.0.0.1"):
+    """The broker to use: the given URL, or an embedded one on a free port of ``host``."""
     if url:
         yield parse_url(url)
     else:
-        with EmbeddedBroker() as broker:
+        with EmbeddedBroker(host) as broker:
             yield broker.url
 
 
 def start(instance: Instance, instance_path: str, schedule, schedule_path: str, *, broker: str | None,
           robots: str, secrets_path: str | None, journal_path: str, settings: dict,
-          sims: SimOptions | None = None, progress=None) -> Outcome:
+          sims: SimOptions | None = None, host: str = "127.0.0.1", progress=None) -> Outcome:
     """A fresh run of a schedule. Raises :class:`ExecutionError` (or another ``BilleError``) for
     bad input before anything is sent or written."""
     plan = bind(instance, schedule)
@@ -119,7 +119,7 @@ def start(instance: Instance, instance_path: str, schedule, schedule_path: str, 
     try:
         journal.write("run", **head)
         with ExitStack() as stack:
-            url = stack.enter_context(broker_at(broker))
+            url = stack.enter_context(broker_at(broker, host))
             if simulate:
                 keys = stack.enter_context(simulated(ids, url, head["fleet"], sims or SimOptions()))
             return run_plan(instance, plan, Settings(url=url, robots=ids, secrets=keys, **settings), journal,
@@ -132,8 +132,9 @@ def start(instance: Instance, instance_path: str, schedule, schedule_path: str, 
 
 
 def resume(journal_path: str, *, broker: str | None, secrets_path: str | None, settings: dict,
-           sims: SimOptions | None = None, progress=None) -> Outcome:
-    """Continue a run from its journal (see :mod:`.journal`)."""
+           sims: SimOptions | None = None, replan: bool = False, host: str = "127.0.0.1", progress=None) -> Outcome:
+    """Continue a run from its journal (see :mod:`.journal`); ``replan`` plans the rest again
+    from the robots' reported state first."""
     done = replay(journal_path)
     head = done.run
     if done.done:
@@ -143,14 +144,14 @@ def resume(journal_path: str, *, broker: str | None, secrets_path: str | None, s
     keys = None if head["simulated"] else _secrets(secrets_path or head["secrets"], ids)
     settings = {**settings, "fleet": head["fleet"]}
     with ExitStack() as stack:
-        url = stack.enter_context(broker_at(broker))
+        url = stack.enter_context(broker_at(broker, host))
         if head["simulated"]:
             keys = stack.enter_context(simulated(ids, url, head["fleet"], sims or SimOptions()))
         journal = Journal(journal_path, append=True)
         stack.callback(journal.close)
         journal.write("resume", finished=done.finished, released=done.released)
         return run_plan(done.instance, done.plan, Settings(url=url, robots=ids, secrets=keys, **settings), journal,
-                        replayed=done, progress=progress)
+                        replayed=done, replan=replan, progress=progress)
 
 
 def _secrets(path: str | None, ids: list[str]) -> dict[str, bytes]:
