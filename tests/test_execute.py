@@ -406,3 +406,15 @@ def test_the_documented_messages_validate_and_their_signatures_verify():
         msg = json.loads(text)
         gate = Gate({msg["robot"]: b"example-secret"})
         assert isinstance(gate.admit(msg["robot"], kind, text.encode()), dict), kind
+
+
+def test_a_journal_line_cut_by_a_crash_is_dropped_before_appending(case, tmp_path, embedded):
+    inst = case[0]
+    out, journal = start(case, tmp_path, embedded, extra={0: ["--fail-at", "6"]})
+    assert out.status == "stopped"
+    with open(journal, "a") as f:
+        f.write('{"event": "finished", "st')  # the executor died while writing
+    assert replay(journal).finished == 5
+    again = session.resume(str(journal), broker=embedded, secrets_path=None, settings=FAST)
+    assert again.status == "completed"
+    assert_journal_sound(journal, inst)

@@ -32,6 +32,8 @@ class Journal:
 
     def __init__(self, path: str | Path, *, append: bool = False):
         self.path = Path(path)
+        if append:
+            _drop_cut_line(self.path)
         try:
             self._file = open(self.path, "a" if append else "x", encoding="utf-8")
         except FileExistsError:
@@ -54,6 +56,17 @@ class Journal:
         self._file.close()
         if self.events <= 1:
             self.path.unlink(missing_ok=True)
+
+
+def _drop_cut_line(path: Path) -> None:
+    """Remove a last line that a crash cut short, so that appended events start on their own line."""
+    try:
+        data = path.read_bytes()
+    except OSError:
+        return  # reported when the file is opened
+    if data and not data.endswith(b"\n"):
+        with open(path, "r+b") as f:
+            f.truncate(data.rfind(b"\n") + 1)
 
 
 @dataclass
