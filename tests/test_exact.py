@@ -101,15 +101,20 @@ def test_a_timeout_returns_the_bound_not_a_crash(method):
 
 
 @pytest.mark.parametrize("method", ["cpsat", "sat"])
-def test_a_timeout_on_path_planning_returns_the_incumbent(method):
-    inst = load_instance(bundled_path("compare-5"))  # about 11 s to the optimum with CP-SAT
-    result = solve(inst, method, time_limit=1.5)
-    assert result.status in ("feasible", "optimal")
+def test_a_timeout_on_path_planning_returns_the_incumbent(method, monkeypatch):
+    from bille.encodings.cnf import SatBackend
+    from bille.encodings.cpsat import CpSatBackend
+
+    # the solver runs out of time at its first call, whatever the machine's speed
+    monkeypatch.setattr(CpSatBackend, "solve", lambda self, *a, **k: "unknown")
+    monkeypatch.setattr(SatBackend, "solve", lambda self, *a, **k: "unknown")
+    inst = load_instance(bundled_path("compare-5"))
+    result = solve(inst, method, time_limit=600)
+    assert result.status == "feasible"
     assert validate(inst, result.schedule).valid
     assert result.stats["incumbent"]["method"] == "temporal-astar"
+    assert result.metrics.makespan == result.stats["incumbent"]["makespan"]
     assert lower_bound(inst).lower <= result.lower_bound <= result.metrics.makespan
-    if result.status == "feasible":
-        assert result.metrics.makespan == result.stats["incumbent"]["makespan"]
 
 
 @pytest.mark.parametrize("method", ["cpsat", "sat"])
