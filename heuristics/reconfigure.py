@@ -54,6 +54,7 @@ from .walking import UNREACHABLE, Walk, walk_for
 
 MOTIONS = ("temporal-astar", "mstar")
 MSTAR_EXPANSIONS = 100_000  # per M* replan: a joint plan that needs more ends the run
+MAX_BACKTRACKS = 20  # undone transfers per run before a deadlock ends it
 PASSING = 2  # a blocked leg costs its free distance plus this many steps per cell between the two robots
 
 
@@ -156,10 +157,12 @@ class Loop:
         self.stats: dict = {"motion": motion, "load_transfer": load_transfer, "d_tr": d_tr, "horizon": horizon,
                             "epsilon": epsilon, "jobs": len(self.jobs), "steps": 0, "relays": 0, "swaps": 0,
                             "pairs_considered": 0, "deferred_manipulations": 0, "priority_shifts": 0,
-                            "circle_shifts": 0, "cautious_steps": 0, "replans": 0, "expanded": 0,
+                            "circle_shifts": 0, "cautious_steps": 0, "replans": 0, "expanded": 0, "backtracks": 0,
                             "plan_ms_mean": 0.0, "plan_ms_max": 0.0}
         self._lists: dict = {}
         self._ready_key, self._ready = None, set()
+        self.tabu: set[tuple] = set()  # transfers that led into a deadlock: never again
+        self._checkpoints: list[tuple] = []  # the loop's state before each step with transfers
         self._joint: list | None = None  # the cached M* plan: remaining joint actions
         self._joint_key = None  # the state, goals and manipulations the cached plan expects next
 
@@ -270,6 +273,7 @@ class Loop:
         m = len(self.legs)
         found: list[Transfer] = []
         carrying = self.state.carrying
+        tabu = self.tabu
         for i in range(m):
             for j in range(m):
                 if i == j or self._manhattan(i, j) > self.d_tr:
@@ -289,6 +293,7 @@ class Loop:
                     best = self._relay(i, j)
                     if best is not None:
                         found.append(best)
+        found = [t for t in found if self._tabu_key(t) not in tabu]
         found.sort(key=lambda t: (-t.saving, t.giver, t.taker))
         chosen, used = [], set()
         for t in found:
@@ -296,9 +301,14 @@ class Loop:
                 continue
             chosen.append(t)
             used |= {t.giver, t.taker}
+        self.chosen_keys = {self._tabu_key(t) for t in chosen}
         for t in chosen:
             self._apply_transfer(t)
         return chosen
+
+    def _tabu_key(self, t: Transfer) -> tuple:
+        """A transfer as the jobs it moves: the same exchange of the same loads, at any step."""
+        return (t.kind, self.legs[t.giver][0].job, self.legs[t.taker][0].job, t.cell)
 
     def _relay(self, i: int, j: int) -> Transfer | None:
         x1, x2 = self.legs[i][0].cell, self.legs[j][0].cell
@@ -543,6 +553,27 @@ class Loop:
         return all(c < 0 or self.world.graphs[i].feet[p, 0] == c
                    for i, (c, p) in enumerate(zip(self.goal_cells, self.state.poses)))
 
+    def _snapshot(self, seen: set) -> tuple:
+        return (self.state, [list(legs) for legs in self.legs], self.next_job, len(self.steps), list(self.Q),
+                set(seen), {k: self.stats[k] for k in ("circle_shifts", "relays", "swaps")})
+
+    def _backtrack(self) -> set:
+        """Undo the latest step that made load transfers, and never make those transfers again.
+
+        Returns the set of loop states seen before it. Called when the robots are going round
+        in circles after a transfer: a relay can lead a robot into a crowd it cannot get through
+        (the cost comparison of equation 2 knows distances, not congestion).
+        """
+        snap, chosen = self._checkpoints.pop()
+        state, legs, next_job, n_steps, Q, seen, counts = snap
+        self.tabu |= chosen
+        self.state, self.legs, self.next_job, self.Q = state, legs, next_job, Q
+        del self.steps[n_steps:]
+        self.stats.update(counts)
+        self.stats["backtracks"] += 1
+        self._ready_key, self._joint, self._joint_key = None, None, None
+        return seen
+
     def run(self, method: str):
         from bille.solvers.bounds import lower_bound
 
@@ -563,10 +594,16 @@ class Loop:
             t0 = time.perf_counter()
             self.allocate()
             if self.load_transfer:
-                self.transfers()
+                snap = self._snapshot(seen)
+                chosen = self.transfers()
+                if chosen:
+                    self._checkpoints.append((snap, self.chosen_keys))
             key = (self.state.key(), tuple(map(tuple, self.legs)), self.next_job, tuple(self.Q))
             if key in seen:  # going round in circles
                 if self.stats["circle_shifts"] >= self.max_shifts:
+                    if self._checkpoints and self.stats["backtracks"] < MAX_BACKTRACKS:
+                        seen = self._backtrack()
+                        continue
                     return stop("deadlock")
                 busy = [i for i in self.Q if self.legs[i] or self.goal(i) is not None] or list(self.Q)
                 _shift_up(self.Q, busy[-1])

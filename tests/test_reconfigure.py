@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from bille.heuristics.reconfigure import Leg, Loop
+from bille.heuristics.reconfigure import Leg, Loop, plan
 from bille.heuristics.sequence import SequenceError, check, derive, sequence_of
 from bille.instances import instance_from_text, load_instance
 from bille.instances.bundled import bundled_path
@@ -236,3 +236,12 @@ def test_allocation_gives_the_next_job_to_the_nearest_idle_robot():
     dists = [int(loop.walk(i).facing_distances(first)[p]) for i, p in enumerate(loop.state.poses)]
     nearest = int(np.argmin(dists))
     assert loop.legs[nearest][0].cell == first and loop.next_job == 2
+
+
+def test_a_transfer_that_leads_into_a_deadlock_is_undone():
+    # on lt-5 a relay sends the taker into the room the two carrying robots must leave through
+    # the corridor it blocks; the loop goes back to before that relay and never makes it again
+    inst = load_instance(bundled_path("lt-5"))
+    result = plan(inst, load_transfer=True, d_tr=5, horizon=10)
+    assert result.status == "feasible" and result.stats["backtracks"] >= 1
+    assert validate(inst, result.schedule).valid
