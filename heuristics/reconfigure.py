@@ -95,6 +95,28 @@ class Transfer:
     cell: int | None = None
 
 
+def _facing_feet(world) -> dict[int, list[np.ndarray]]:
+    """For each cell, per moveset, the feet ``int[k, 2]`` of the poses that pick or place there."""
+    out: dict[int, list[np.ndarray]] = {}
+    for graph, _ in world.groups:
+        kinds = graph.kind
+        manip = [a for a in range(graph.num_actions) if kinds[a] in (Kind.PICK, Kind.PLACE)]
+        cells, poses = [], []
+        for a in manip:
+            p = np.flatnonzero(graph.valid & (graph.target[:, a] >= 0))
+            cells.append(graph.target[p, a])
+            poses.append(p)
+        if not cells:
+            continue
+        cells, poses = np.concatenate(cells), np.concatenate(poses)
+        order = np.argsort(cells, kind="stable")
+        cells, poses = cells[order], poses[order]
+        bounds = np.flatnonzero(np.diff(cells)) + 1
+        for c, group in zip(cells[np.r_[0, bounds]], np.split(poses, bounds)):
+            out.setdefault(int(c), []).append(graph.feet[np.unique(group)])
+    return out
+
+
 def plan(instance: Instance, *, motion: str = "temporal-astar", load_transfer: bool = False, d_tr: int = 5,
          epsilon: float = 1.0, horizon: int = 5, time_limit: float | None = None, max_steps: int | None = None,
          max_shifts: int | None = None, priorities: list[int] | None = None, method: str | None = None):
@@ -161,6 +183,11 @@ class Loop:
                             "plan_ms_mean": 0.0, "plan_ms_max": 0.0}
         self._lists: dict = {}
         self._ready_key, self._ready = None, set()
+        self._facing_feet = _facing_feet(self.world)
+        # check facing poses of the sequence's picks and places only if the sequence has them
+        # in order (derived sequences do; a given task list may not)
+        self._stands = True
+        self._stands = self._executable(self.state.tiles, self._pending_ops())
         self.tabu: set[tuple] = set()  # transfers that led into a deadlock: never again
         self._checkpoints: list[tuple] = []  # the loop's state before each step with transfers
         self._joint: list | None = None  # the cached M* plan: remaining joint actions
@@ -405,10 +432,21 @@ class Loop:
         return ops
 
     def _executable(self, tiles: np.ndarray, ops) -> bool:
-        """Whether ``ops`` run in order from ``tiles``, each keeping the structure connected."""
+        """Whether ``ops`` run in order from ``tiles``, each keeping the structure connected and,
+        when the sequence allows it, with a pose facing its cell that stands on the tiles of that
+        moment (an early pick must not take away the tile a later place needs to stand on)."""
         w, h = self.instance.width, self.instance.height
         tiles = tiles.copy()
-        return all(apply_move(tiles, kind == Kind.PICK, cell, w, h) is None for _, kind, cell, _ in ops)
+        for _, kind, cell, _ in ops:
+            if self._stands and not self._can_face(tiles, cell):
+                return False
+            if apply_move(tiles, kind == Kind.PICK, cell, w, h) is not None:
+                return False
+        return True
+
+    def _can_face(self, tiles: np.ndarray, cell: int) -> bool:
+        """Whether some robot could stand on ``tiles`` facing ``cell`` to pick or place there."""
+        return any(bool(tiles[feet].all(axis=1).any()) for feet in self._facing_feet.get(cell, ()))
 
     def ready(self) -> set[int]:
         """Robots whose next pick or place could happen now as far as the tiles go: the cell

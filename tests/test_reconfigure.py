@@ -245,3 +245,16 @@ def test_a_transfer_that_leads_into_a_deadlock_is_undone():
     result = plan(inst, load_transfer=True, d_tr=5, horizon=10)
     assert result.status == "feasible" and result.stats["backtracks"] >= 1
     assert validate(inst, result.schedule).valid
+
+
+def test_an_early_pick_keeps_the_tile_a_later_place_stands_on():
+    # job 6 picks (9, 8), the tile a robot stands on to place job 5's tile at (11, 8); picked
+    # early, it left both robots carrying tiles that neither could place (a deadlock)
+    inst = random_reconfiguration(15, 15, 60, 2, 10, seed=2)
+    loop = Loop(inst, horizon=10)
+    w = inst.width
+    assert [(j.pick % w, j.pick // w, j.place % w, j.place // w) for j in loop.jobs[5:7]] == [
+        (6, 8, 11, 8), (9, 8, 12, 8)]
+    result = loop.run("temporal-astar")
+    assert result.status == "feasible"
+    assert validate(inst, result.schedule).valid
