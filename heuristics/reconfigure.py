@@ -300,7 +300,6 @@ class Loop:
         m = len(self.legs)
         found: list[Transfer] = []
         carrying = self.state.carrying
-        tabu = self.tabu
         for i in range(m):
             for j in range(m):
                 if i == j or self._manhattan(i, j) > self.d_tr:
@@ -320,7 +319,7 @@ class Loop:
                     best = self._relay(i, j)
                     if best is not None:
                         found.append(best)
-        found = [t for t in found if self._tabu_key(t) not in tabu]
+        found = [t for t in found if self._tabu_key(t) not in self.tabu]
         found.sort(key=lambda t: (-t.saving, t.giver, t.taker))
         chosen, used = [], set()
         for t in found:
@@ -591,9 +590,10 @@ class Loop:
         return all(c < 0 or self.world.graphs[i].feet[p, 0] == c
                    for i, (c, p) in enumerate(zip(self.goal_cells, self.state.poses)))
 
-    def _snapshot(self, seen: set) -> tuple:
+    def _snapshot(self) -> tuple:
+        """The loop's state before a step's transfers (the states seen are added if any are made)."""
         return (self.state, [list(legs) for legs in self.legs], self.next_job, len(self.steps), list(self.Q),
-                set(seen), {k: self.stats[k] for k in ("circle_shifts", "relays", "swaps")})
+                {k: self.stats[k] for k in ("circle_shifts", "relays", "swaps")})
 
     def _backtrack(self) -> set:
         """Undo the latest step that made load transfers, and never make those transfers again.
@@ -602,8 +602,8 @@ class Loop:
         in circles after a transfer: a relay can lead a robot into a crowd it cannot get through
         (the cost comparison of equation 2 knows distances, not congestion).
         """
-        snap, chosen = self._checkpoints.pop()
-        state, legs, next_job, n_steps, Q, seen, counts = snap
+        snap, seen, chosen = self._checkpoints.pop()
+        state, legs, next_job, n_steps, Q, counts = snap
         self.tabu |= chosen
         self.state, self.legs, self.next_job, self.Q = state, legs, next_job, Q
         del self.steps[n_steps:]
@@ -632,10 +632,9 @@ class Loop:
             t0 = time.perf_counter()
             self.allocate()
             if self.load_transfer:
-                snap = self._snapshot(seen)
-                chosen = self.transfers()
-                if chosen:
-                    self._checkpoints.append((snap, self.chosen_keys))
+                snap = self._snapshot()
+                if self.transfers():
+                    self._checkpoints.append((snap, set(seen), self.chosen_keys))
             key = (self.state.key(), tuple(map(tuple, self.legs)), self.next_job, tuple(self.Q))
             if key in seen:  # going round in circles
                 if self.stats["circle_shifts"] >= self.max_shifts:
