@@ -418,3 +418,11 @@ def test_a_journal_line_cut_by_a_crash_is_dropped_before_appending(case, tmp_pat
     again = session.resume(str(journal), broker=embedded, secrets_path=None, settings=FAST)
     assert again.status == "completed"
     assert_journal_sound(journal, inst)
+
+
+def test_point_robots_run_too(tmp_path, embedded):
+    ip, sp = str(resolve("point-4")), str(resolve("point-4.schedule"))
+    inst, sched = load_instance(ip), load_schedule(sp)
+    out = session.start(inst, ip, sched, sp, broker=embedded, robots="sim", secrets_path=None,
+                        journal_path=str(tmp_path / "p.jsonl"), settings=FAST)
+    assert out.status == "completed" and out.worlds_match and out.finished == sched.length
