@@ -106,10 +106,10 @@ def run(instance, schedule, journal_in, replan, broker, bind, robots, secrets_pa
         if instance or schedule:
             raise click.UsageError("give either INSTANCE SCHEDULE or --resume JOURNAL, not both")
         path = Path(journal_in)
-        total = session.replay(path).plan.shape[1]
-        with _Progress(not as_json and sys.stderr.isatty(), total) as bar:
+        done = session.replay(path)
+        with _Progress(not as_json and sys.stderr.isatty(), done.plan.shape[1]) as bar:
             out = session.resume(journal_in, broker=broker, secrets_path=secrets_path, settings=settings, sims=sims,
-                                 replan=replan, host=bind, progress=bar)
+                                 replan=replan, host=bind, progress=bar, done=done)
     else:
         if not instance or not schedule:
             raise click.UsageError("missing INSTANCE and SCHEDULE (or --resume JOURNAL)")

@@ -104,12 +104,12 @@ class Executor:
     """Runs ``plan`` (action ids ``int[m, L]``) of ``instance`` on the robots of ``settings``."""
 
     def __init__(self, instance: Instance, plan: np.ndarray, settings: Settings, journal: Journal,
-                 progress: Callable[[int, int, list[str]], None] | None = None):
+                 progress: Callable[[int, int, list[str]], None] | None = None, states: list[State] | None = None):
         if len(settings.robots) != instance.num_robots:
             raise ExecutionError(f"--robots: {len(settings.robots)} robots given, but the schedule has "
                                  f"{instance.num_robots}")
         self.instance, self.world, self.s, self.journal = instance, instance.world, settings, journal
-        self.set_plan(plan, plan_states(instance, plan, "the schedule"))
+        self.set_plan(plan, states if states is not None else plan_states(instance, plan, "the schedule"))
         self.progress = progress or (lambda k, done, waiting: None)
         self.gate = Gate(settings.secrets)
         self.sealers = {r: Sealer(r, settings.secrets[r]) for r in settings.robots}
@@ -450,7 +450,10 @@ def run_plan(instance: Instance, plan: np.ndarray, settings: Settings, journal: 
     ``replan``: plan the rest again (``settings.replan_method``) from the state the robots report
     before releasing anything.
     """
-    ex = Executor(instance, replayed.plan if replayed else plan, settings, journal, progress)
+    if replayed is not None:  # the journal's plan and the world after each of its steps
+        ex = Executor(instance, replayed.plan, settings, journal, progress, states=replayed.states)
+    else:
+        ex = Executor(instance, plan, settings, journal, progress)
     ex.connect()
     try:
         finished = replayed.finished if replayed else 0

@@ -20,7 +20,7 @@ from bille.solvers import bind, validate
 
 from .broker import BrokerURL, EmbeddedBroker, parse_url
 from .executor import Outcome, Settings, load_secrets, run_plan
-from .journal import Journal, replay, sha256_file
+from .journal import Journal, Replayed, replay, sha256_file
 from .protocol import ExecutionError
 
 SECRET_ENV = "BILLE_ROBOT_SECRET"
@@ -132,10 +132,11 @@ def start(instance: Instance, instance_path: str, schedule, schedule_path: str, 
 
 
 def resume(journal_path: str, *, broker: str | None, secrets_path: str | None, settings: dict,
-           sims: SimOptions | None = None, replan: bool = False, host: str = "127.0.0.1", progress=None) -> Outcome:
+           sims: SimOptions | None = None, replan: bool = False, host: str = "127.0.0.1", progress=None,
+           done: Replayed | None = None) -> Outcome:
     """Continue a run from its journal (see :mod:`.journal`); ``replan`` plans the rest again
-    from the robots' reported state first."""
-    done = replay(journal_path)
+    from the robots' reported state first. ``done``: the journal already replayed."""
+    done = done if done is not None else replay(journal_path)
     head = done.run
     if done.done:
         raise ExecutionError(f"{journal_path}: the run is complete (step {done.finished}); nothing to resume")
