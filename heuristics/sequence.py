@@ -92,20 +92,19 @@ def check(instance: Instance, jobs: list[Job], *, given: bool = False) -> None:
         label = f"tasks[{k - offset}]" if given and job.pick is not None else f"job {k}"
         raise SequenceError(f"{instance.name}: {label} ({job.describe(w)}): {what}")
 
+    # (pick?, what the cell holds when the move cannot run, what breaks the structure)
+    moves = ((True, "pick", "holds no tile", "picking this tile disconnects the structure"),
+             (False, "place", "already holds a tile", "the placed tile does not touch the structure"))
     for k, job in enumerate(jobs):
-        if job.pick is not None:
-            if obstacles[job.pick]:
-                fail(k, "the pick cell is an obstacle")
-            broken = apply_move(tiles, True, job.pick, w, h)
+        for pick, name, held, cut in moves:
+            cell = job.pick if pick else job.place
+            if cell is None:
+                continue
+            if obstacles[cell]:
+                fail(k, f"the {name} cell is an obstacle")
+            broken = apply_move(tiles, pick, cell, w, h)
             if broken:
-                fail(k, "the pick cell holds no tile when the task runs" if broken == "precondition"
-                     else "picking this tile disconnects the structure")
-        if obstacles[job.place]:
-            fail(k, "the place cell is an obstacle")
-        broken = apply_move(tiles, False, job.place, w, h)
-        if broken:
-            fail(k, "the place cell already holds a tile when the task runs" if broken == "precondition"
-                 else "the placed tile does not touch the structure")
+                fail(k, f"the {name} cell {held} when the task runs" if broken == "precondition" else cut)
     goal = instance.goal_tiles
     if not np.array_equal(tiles, goal):
         extra = [instance.world.xy(c) for c in np.flatnonzero(tiles & ~goal)[:3]]
