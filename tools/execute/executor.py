@@ -33,7 +33,7 @@ from bille.solvers import Schedule, bind, save_schedule, solve
 from .broker import BrokerURL, close, connect
 from .journal import Journal, Replayed, plan_states, sha256_file
 from .protocol import (ExecutionError, Gate, Sealer, new_session, parse_topic, pose_from_json, pose_json,
-                       tile_cells, tiles_digest, topic)
+                       tile_cells, tiles_summary, topic)
 
 log = logging.getLogger("bille.execute")
 POLICIES = ("stop", "retry", "replan")
@@ -204,8 +204,7 @@ class Executor:
         st = self.states[k]
         key = st.tiles.tobytes()
         if key not in self._digests:
-            cells = tile_cells(st.tiles, self.world.width)
-            self._digests = {key: {"count": len(cells), "digest": tiles_digest(map(tuple, cells))}}
+            self._digests = {key: tiles_summary(st.tiles, self.world.width)}
         return {"pose": pose_json(self.world.graphs[i], st.poses[i]), "carrying": bool(st.carrying[i]),
                 "tiles": self._digests[key]}
 

@@ -118,13 +118,6 @@ def plan_states(instance, plan: np.ndarray, what: str, start: State | None = Non
     return states
 
 
-def load_plan(instance_path: str, schedule_path: str, instance=None):
-    """The instance and the schedule's action ids, checked against the files' journaled hashes
-    by the caller."""
-    instance = instance if instance is not None else load_instance(instance_path)
-    return instance, bind(instance, load_schedule(schedule_path))
-
-
 def replay(path: str | Path) -> Replayed:
     """Rebuild a run from its journal (see the module docstring)."""
     events = read_events(path)
@@ -137,7 +130,8 @@ def replay(path: str | Path) -> Replayed:
         except OSError as exc:
             raise ExecutionError(f"{path}: cannot read the run's {key} {file} ({exc.strerror})") from None
     try:
-        instance, plan = load_plan(head["instance"], head["schedule"])
+        instance = load_instance(head["instance"])
+        plan = bind(instance, load_schedule(head["schedule"]))
     except BilleError as exc:
         raise ExecutionError(f"{path}: {exc}") from None
     released = finished = 0

@@ -299,6 +299,12 @@ def pose_from_json(graph, obj: dict) -> int:
     return graph.pose_of(tuple(obj["front"]), tuple(obj["back"]))
 
 
+def tiles_summary(tiles, width: int) -> dict:
+    """The ``tiles`` field of a state report: the count and :func:`tiles_digest` of a tile mask."""
+    cells = tile_cells(tiles, width)
+    return {"count": len(cells), "digest": tiles_digest(map(tuple, cells))}
+
+
 def tile_cells(tiles, width: int) -> list[list[int]]:
     """A tile mask as ``[[x, y], ...]`` in row-major order."""
     return [[int(c) % width, int(c) // width] for c in tiles.nonzero()[0]]

@@ -24,7 +24,7 @@ from bille.instances.grid import is_connected
 from bille.instances.rules import State, Violation, World, apply
 
 from .broker import BrokerURL, close, connect
-from .protocol import (Gate, Sealer, parse_topic, pose_from_json, pose_json, tile_cells, tiles_digest,
+from .protocol import (Gate, Sealer, parse_topic, pose_from_json, pose_json, tiles_digest, tiles_summary,
                        topic)
 
 log = logging.getLogger("bille.robot")
@@ -244,7 +244,6 @@ class SimRobot:
         self.action_states.append({"sequenceId": k, "action": name, "actionStatus": status})
 
     def state(self, reply_to: str | None = None) -> dict:
-        cells = tile_cells(self.tiles, self.world.width) if self.world is not None else []
         return {
             "initialized": self.world is not None,
             "orderId": self.order_id,
@@ -252,7 +251,8 @@ class SimRobot:
             "lastStep": self.last_step,
             "pose": pose_json(self.graph, self.pose) if self.world is not None else None,
             "carrying": self.carrying,
-            "tiles": {"count": len(cells), "digest": tiles_digest(map(tuple, cells))},
+            "tiles": tiles_summary(self.tiles, self.world.width) if self.world is not None
+            else {"count": 0, "digest": tiles_digest([])},
             "actionStates": list(self.action_states),
             "errors": list(self.errors),
             "counters": dict(self.counters),
