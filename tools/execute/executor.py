@@ -25,7 +25,7 @@ from typing import Callable
 
 import numpy as np
 
-from bille.instances import BilleError, Instance, Robot, dump_instance
+from bille.instances import Instance, Robot, dump_instance
 from bille.instances.grid import Grid
 from bille.instances.rules import State, Violation, apply
 from bille.solvers import Schedule, bind, save_schedule, solve
