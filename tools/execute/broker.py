@@ -7,9 +7,11 @@ needs no set-up. Any external broker (mosquitto, say) is reached by ``mqtt://hos
 from __future__ import annotations
 
 import asyncio
+import gc
 import logging
 import socket
 import threading
+import warnings
 from dataclasses import dataclass
 from urllib.parse import urlsplit
 
@@ -110,6 +112,12 @@ class EmbeddedBroker:
             self._thread.join(5)
         if not self._loop.is_running() and not self._loop.is_closed():
             self._loop.close()
+        # amqtt's shutdown leaves client connections' transports behind; close them now, here,
+        # rather than whenever the collector meets them (with a ResourceWarning each)
+        self._broker = None
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", ResourceWarning)
+            gc.collect()
 
     def __enter__(self) -> "EmbeddedBroker":
         return self.start()
