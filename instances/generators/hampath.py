@@ -1,0 +1,259 @@
+"""The paper's NP-hardness construction: Theorem 1 (``bille gen hampath``) and Corollary 1
+(``--robots m``).
+
+A grid graph ``G`` becomes a reconfiguration instance for one ``point`` robot whose optimal
+makespan is ``(s + 7)(|V| - 1) + t_g |V|`` exactly when ``G`` has a Hamiltonian path starting at
+the robot's vertex, and larger otherwise. The paper's figure is missing; this is our gadget.
+Around every vertex tile ``V`` (offsets ``dx, dy`` from it, ``y`` down)::
+
+    . p . # . t .       #  gadget tile (the 7x7 cross and a 5x5 ring)
+    t # # # # # p       V  the vertex tile
+    . # . # . # .       t  task tile: a tile in the start only
+    # # # V # # #       p  task position: a tile in the goal only
+    . # . # . # .
+    p # # # # # t
+    . t . # . p .
+
+Each corner of the ring has a task tile on one outer side and a task position on the other: a
+robot standing on the corner picks the one and places it on the other, two steps. A task cell's
+only tile neighbour is its corner, so every corner must be visited. The four corners are 4
+apart on the ring; the cross's arms leave the ring at the middle of its sides, 2 from the two
+nearest corners. So a robot that enters by one arm and leaves by any other walks 2 + 4 + 4 + 4 + 2
+between the ring's sides instead of the 4 of a straight pass, ``t_g = 12 + 8 = 20`` steps more
+than walking through; one that enters and stops (the path's last vertex) walks 2 + 12 and its 8
+manipulations, 20 more than reaching ``V``; and the robot starts on a corner of its vertex's ring,
+from which the other three corners and any arm cost the same 20. Adjacent vertex tiles are
+``s + 7`` apart, joined along the arms by ``s`` edge tiles, so a Hamiltonian path costs exactly
+``(s + 7)(|V| - 1) + 20 |V|``; a walk that has to come back through a vertex walks an edge
+twice, ``s + 7`` more than the bound and more than the at most 8 it can save in the gadgets it
+cuts short. The numbers are checked by exhaustive search in the tests (docs/generators.md).
+
+The robot's start vertex is part of the instance: the bound is met exactly when a Hamiltonian
+path *from that vertex* exists. By default it is a vertex of degree 1 if there is one (every
+Hamiltonian path then has it at one end), else the first vertex; see docs/decisions.md.
+
+Corollary 1: ``robots`` copies side by side, so far apart (the bound plus one) that no robot can
+reach another copy before its own is done, joined by one line of tiles above them; one robot
+each.
+"""
+from __future__ import annotations
+
+from collections import deque
+
+import networkx as nx
+import numpy as np
+
+from ..errors import InstanceError
+from ..grid import Grid
+from ..instance import Instance, Robot, check_instance
+from ..moveset import Kind, load_moveset
+from ..rules import State, apply
+from .graphs import draw_graph, hamiltonian_path
+
+XY = tuple[int, int]
+HALF = 3                     # a gadget spans -3..3 around its vertex tile
+T_G = 20                     # steps to solve one gadget beyond walking through it (see above)
+CROSS = frozenset({(0, 0)} | {(d * k, 0) for d in (1, -1) for k in (1, 2, 3)}
+                  | {(0, d * k) for d in (1, -1) for k in (1, 2, 3)})
+RING = frozenset((x, y) for x in range(-2, 3) for y in range(-2, 3) if max(abs(x), abs(y)) == 2)
+# (corner, task tile, task position), a quarter turn apart
+CORNERS = (((2, 2), (3, 2), (2, 3)), ((-2, 2), (-2, 3), (-3, 2)),
+           ((-2, -2), (-3, -2), (-2, -3)), ((2, -2), (2, -3), (3, -2)))
+ROBOT_CORNER = CORNERS[0][0]
+
+
+def bound(vertices: int, scale: int) -> int:
+    """Theorem 1's makespan, ``(s + 7)(|V| - 1) + t_g |V|``."""
+    return (scale + 2 * HALF + 1) * (vertices - 1) + T_G * vertices
+
+
+def default_start(g: nx.Graph) -> XY:
+    """A vertex of degree 1 if there is one (every Hamiltonian path ends there), else the first
+    vertex, both in reading order (by ``y``, then ``x``)."""
+    order = sorted(g.nodes, key=lambda v: (v[1], v[0]))
+    return next((v for v in order if g.degree(v) == 1), order[0])
+
+
+def reduction(g: nx.Graph, scale: int, *, start: XY | None = None, robots: int = 1, moveset: str = "point",
+              name: str | None = None) -> Instance:
+    """Theorem 1's instance for grid graph ``g`` (Corollary 1's with ``robots > 1``).
+
+    Raises :class:`InstanceError` for an empty or disconnected graph, a scale below 1, fewer
+    than one robot, or a start that is not a vertex.
+    """
+    if g.number_of_nodes() == 0:
+        raise InstanceError("the graph has no vertices")
+    if not nx.is_connected(g):
+        raise InstanceError(f"the graph is not connected ({nx.number_connected_components(g)} parts)")
+    if scale < 1:
+        raise InstanceError(f"the scale must be at least 1, got {scale}")
+    if robots < 1:
+        raise InstanceError(f"at least 1 robot, got {robots}")
+    start = default_start(g) if start is None else tuple(start)
+    if start not in g:
+        raise InstanceError(f"the start vertex {start} is not a vertex of the graph")
+    ms = load_moveset(moveset)
+    pitch = scale + 2 * HALF + 1
+    xs, ys = [x for x, _ in g.nodes], [y for _, y in g.nodes]
+    copy_w = 2 * HALF + 1 + (max(xs) - min(xs)) * pitch
+    copy_h = 2 * HALF + 1 + (max(ys) - min(ys)) * pitch
+    n = g.number_of_nodes()
+    best = bound(n, scale)
+    gap = best + 1 if robots > 1 else 0
+    top = 2 if robots > 1 else 0                 # the line joining the copies runs along row 0
+    width, height = robots * copy_w + (robots - 1) * gap, top + copy_h
+
+    def centre(v: XY, k: int) -> XY:
+        return (k * (copy_w + gap) + HALF + (v[0] - min(xs)) * pitch, top + HALF + (v[1] - min(ys)) * pitch)
+
+    anchor = min(g.nodes, key=lambda v: (v[1], v[0]))
+    base, tiles_only, goal_only, placed = set(), set(), set(), []
+    for k in range(robots):
+        for v in g.nodes:
+            cx, cy = centre(v, k)
+            base |= {(cx + dx, cy + dy) for dx, dy in CROSS | RING}
+            tiles_only |= {(cx + tx, cy + ty) for _, (tx, ty), _ in CORNERS}
+            goal_only |= {(cx + px, cy + py) for _, _, (px, py) in CORNERS}
+        for u, v in g.edges:
+            (ux, uy), (vx, vy) = sorted((centre(u, k), centre(v, k)))
+            base |= {(x, uy) for x in range(ux + HALF + 1, vx - HALF)} if uy == vy else \
+                    {(ux, y) for y in range(uy + HALF + 1, vy - HALF)}
+        cx, cy = centre(start, k)
+        front = (cx + ROBOT_CORNER[0], cy + ROBOT_CORNER[1])
+        placed.append(Robot(front) if ms.footprint == "point" else Robot(front, (front[0] - 1, front[1])))
+        if robots > 1:   # down from the joining line to the upper arm of a top vertex (free: none above)
+            ax, ay = centre(anchor, k)
+            base |= {(ax, y) for y in range(0, ay - HALF)}
+    if robots > 1:
+        base |= {(x, 0) for x in range(centre(anchor, 0)[0], centre(anchor, robots - 1)[0] + 1)}
+    path = hamiltonian_path(g, start=start)
+    point = ms.footprint == "point"
+    meta = {"generator": "hampath", "theorem": "1" if robots == 1 else "corollary 1", "scale": scale,
+            "vertices": n, "edges": g.number_of_edges(), "robots": robots, "start_vertex": list(start),
+            "graph": draw_graph(g), "t_g": T_G if point else None, "bound": best if point else None,
+            "hamiltonian_path_from_start": None if path is None else [list(v) for v in path]}
+    if not point:
+        meta["note"] = "t_g and the bound are those of the point footprint (the paper's model) only"
+    return check_instance(Instance(
+        name or f"hampath-v{n}-s{scale}" + (f"-r{robots}" if robots > 1 else ""), ms,
+        _grid(width, height, base | tiles_only), tuple(placed), goal=_grid(width, height, base | goal_only),
+        meta=meta))
+
+
+def _grid(width: int, height: int, cells) -> Grid:
+    tiles = np.zeros(width * height, dtype=bool)
+    for x, y in cells:
+        tiles[y * width + x] = True
+    return Grid.from_masks(width, height, np.zeros(width * height, dtype=bool), tiles)
+
+
+# ---------------------------------------------------------------------------------------------
+# exhaustive search over the single robot's states, for the reductions' small cases
+
+def search_optimum(inst: Instance, limit: int, *, max_states: int = 2_000_000):
+    """The optimal makespan of a one-robot instance if it is at most ``limit``, with a schedule
+    of that length (as a list of action ids); ``None`` when no schedule of at most ``limit``
+    steps exists.
+
+    Breadth-first over the robot's states under the canonical rules, with picks and places only
+    on the cells where start and goal differ (the task cells: a manipulation elsewhere has to be
+    undone and is never shorter on these instances, see docs/generators.md), cutting every state
+    whose steps so far plus a lower bound on the steps still needed exceed ``limit``. The lower
+    bound counts one manipulation per cell that still differs from the goal and the weight of a
+    minimum spanning tree joining the robot with the site of every such cell (the one tile a
+    robot can stand on next to it), by walking distances over the start and goal tiles together.
+
+    Raises :class:`InstanceError` for more than one robot, a robot that is not ``point``, or a
+    task cell with other than one tile neighbour, and when ``max_states`` are stored.
+    """
+    if inst.num_robots != 1 or inst.movesets[0].footprint != "point":
+        raise InstanceError("search_optimum: one point robot only")
+    world, w = inst.world, inst.width
+    graph = world.graphs[0]
+    start_tiles, goal = inst.start.tiles, inst.goal_tiles
+    walk = start_tiles | goal
+    task_set = {int(c) for c in np.flatnonzero(start_tiles != goal)}
+    site = {}
+    for c in sorted(task_set):
+        around = [m for m in _neighbours(c, w, inst.height) if walk[m] and m not in task_set]
+        if len(around) != 1:
+            raise InstanceError(f"search_optimum: task cell {world.xy(c)} has {len(around)} tile neighbours, not 1")
+        site[c] = around[0]
+    dist = {s: _distances(s, walk, w, inst.height) for s in set(site.values())}
+
+    def h(state: State) -> int:
+        differ = [c for c in task_set if state.tiles[c] != goal[c]]
+        need = sorted({site[c] for c in differ})
+        pos = int(graph.feet[state.poses[0], 0])
+        return len(differ) + _mst([pos] + need, dist)
+
+    root = inst.start_state
+    if h(root) > limit:
+        return None
+    parent = {root.key(): None}
+    frontier, depth = [root], 0
+    while frontier:
+        for s in frontier:
+            if not s.carrying[0] and np.array_equal(s.tiles, goal):
+                return depth, _unwind(parent, s)
+        if depth == limit:
+            return None
+        nxt = []
+        for s in frontier:
+            p = s.poses[0]
+            for a in range(graph.num_actions):
+                if graph.succ[p, a] < 0:
+                    continue
+                if graph.kind[a] in (Kind.PICK, Kind.PLACE) and int(graph.target[p, a]) not in task_set:
+                    continue
+                new = apply(world, s, [a])
+                if not isinstance(new, State):
+                    continue
+                key = new.key()
+                if key in parent or depth + 1 + h(new) > limit:
+                    continue
+                parent[key] = (s.key(), a)
+                nxt.append(new)
+                if len(parent) > max_states:
+                    raise InstanceError(f"search_optimum: more than {max_states} states (a smaller instance)")
+        frontier, depth = nxt, depth + 1
+    return None
+
+
+def _neighbours(c: int, w: int, h: int):
+    x, y = c % w, c // w
+    return [(y + dy) * w + x + dx for dx, dy in ((1, 0), (-1, 0), (0, 1), (0, -1)) if 0 <= x + dx < w and 0 <= y + dy < h]
+
+
+def _distances(src: int, walk: np.ndarray, w: int, h: int) -> dict:
+    dist, queue = {src: 0}, deque([src])
+    while queue:
+        c = queue.popleft()
+        for m in _neighbours(c, w, h):
+            if walk[m] and m not in dist:
+                dist[m] = dist[c] + 1
+                queue.append(m)
+    return dist
+
+
+def _mst(points: list, dist: dict) -> int:
+    """Prim's minimum spanning tree weight; ``points[0]`` is the robot, the rest are sites."""
+    if len(points) <= 1:
+        return 0
+    inf = float("inf")
+    best = {q: dist[q].get(points[0], inf) for q in points[1:]}
+    total = 0
+    while best:
+        q = min(best, key=best.get)
+        total += best.pop(q)
+        for r in best:
+            best[r] = min(best[r], dist[q].get(r, inf))
+    return total
+
+
+def _unwind(parent: dict, state: State) -> list[int]:
+    actions, key = [], state.key()
+    while parent[key] is not None:
+        key, a = parent[key]
+        actions.append(a)
+    return actions[::-1]
