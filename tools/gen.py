@@ -101,6 +101,58 @@ def gen_movingai(map_file, scen, agents, seed, output, as_json) -> int:
     return _output(from_movingai(map_file, scen, agents=agents, seed=seed), output, as_json)
 
 
+def _graph(graph_file, vertices, seed):
+    """The grid graph of a GRAPH file or a random one of ``vertices`` vertices; connected."""
+    import networkx as nx
+
+    from bille.instances.generators.graphs import load_graph, random_grid_graph
+
+    if (graph_file is None) == (vertices is None):
+        raise click.UsageError("give a GRAPH file or --vertices N (not both)")
+    g = load_graph(graph_file) if graph_file else random_grid_graph(vertices, seed)
+    if not nx.is_connected(g):
+        raise InstanceError(f"{graph_file}: the graph is not connected ({nx.number_connected_components(g)} parts)")
+    return g
+
+
+def _vertex(text: str | None):
+    if text is None:
+        return None
+    try:
+        x, y = (int(v) for v in text.split(","))
+    except ValueError:
+        raise click.BadParameter(f"expected X,Y (two integers), got {text!r}", param_hint="--start") from None
+    return (x, y)
+
+
+@gen.command("hampath")
+@click.argument("graph_file", metavar="GRAPH", required=False)
+@click.option("--vertices", type=int, help="Use a random connected grid graph of this many vertices instead.")
+@click.option("--scale", "-s", type=click.IntRange(min=1), default=1, show_default=True,
+              help="Edge tiles between two gadgets (vertex tiles are s + 7 apart).")
+@click.option("--start", metavar="X,Y", help="The graph vertex the robot starts at (default: a vertex of degree 1, "
+                                             "else the first).")
+@click.option("--robots", "-m", type=click.IntRange(min=1), default=1, show_default=True,
+              help="Corollary 1: this many copies, one robot each.")
+@click.option("--moveset", default="point", show_default=True)
+@click.option("--search", is_flag=True, help="Also decide by exhaustive search whether the optimal makespan is the "
+                                             "bound (small graphs only; one robot, point).")
+@common
+def gen_hampath(graph_file, vertices, scale, start, robots, moveset, search, seed, output, as_json) -> int:
+    """Theorem 1's reduction from Hamiltonian path: a vertex gadget per vertex of GRAPH, edge
+    tiles between adjacent ones; the bound (s + 7)(|V| - 1) + t_g |V| is in the metadata."""
+    from bille.instances.generators.hampath import reduction, search_optimum
+
+    inst = reduction(_graph(graph_file, vertices, seed), scale, start=_vertex(start), robots=robots,
+                     moveset=moveset)
+    if search:
+        if robots != 1 or inst.meta["bound"] is None:
+            raise click.UsageError("--search takes one robot with the point moveset")
+        found = search_optimum(inst, inst.meta["bound"])
+        inst.meta["optimal_is_bound"] = found is not None and len(found) == inst.meta["bound"]
+    return _output(inst, output, as_json)
+
+
 @gen.command("graph")
 @click.argument("graph_file", metavar="GRAPH", required=False)
 @click.option("--vertices", type=int, help="Generate a random connected grid graph of this many vertices.")
@@ -110,16 +162,10 @@ def gen_movingai(map_file, scen, agents, seed, output, as_json) -> int:
 def gen_graph(graph_file, vertices, seed, output, as_json) -> int:
     """Read GRAPH (a drawing with 'o' or lines 'x y') or make a random grid graph, and decide
     whether it has a Hamiltonian path."""
-    import networkx as nx
-
-    from bille.instances.generators.graphs import draw_graph, hamiltonian_path, load_graph, random_grid_graph
+    from bille.instances.generators.graphs import draw_graph, hamiltonian_path
     from bille.instances.instance import write_atomic
 
-    if (graph_file is None) == (vertices is None):
-        raise click.UsageError("give a GRAPH file or --vertices N (not both)")
-    g = load_graph(graph_file) if graph_file else random_grid_graph(vertices, seed)
-    if not nx.is_connected(g):
-        raise InstanceError(f"{graph_file}: the graph is not connected ({nx.number_connected_components(g)} parts)")
+    g = _graph(graph_file, vertices, seed)
     path = hamiltonian_path(g)
     drawing = draw_graph(g)
     if output:

@@ -151,9 +151,8 @@ def _grid(width: int, height: int, cells) -> Grid:
 # exhaustive search over the single robot's states, for the reductions' small cases
 
 def search_optimum(inst: Instance, limit: int, *, max_states: int = 2_000_000):
-    """The optimal makespan of a one-robot instance if it is at most ``limit``, with a schedule
-    of that length (as a list of action ids); ``None`` when no schedule of at most ``limit``
-    steps exists.
+    """An optimal schedule of a one-robot instance, as a list of action names, if its makespan
+    is at most ``limit``; ``None`` when no schedule of at most ``limit`` steps exists.
 
     Breadth-first over the robot's states under the canonical rules, with picks and places only
     on the cells where start and goal differ (the task cells: a manipulation elsewhere has to be
@@ -195,7 +194,8 @@ def search_optimum(inst: Instance, limit: int, *, max_states: int = 2_000_000):
     while frontier:
         for s in frontier:
             if not s.carrying[0] and np.array_equal(s.tiles, goal):
-                return depth, _unwind(parent, s)
+                names = inst.movesets[0].names
+                return [names[a] for a in _unwind(parent, s)]
         if depth == limit:
             return None
         nxt = []
