@@ -25,8 +25,9 @@ manipulations, 20 more than reaching ``V``; and the robot starts on a corner of 
 from which the other three corners and any arm cost the same 20. Adjacent vertex tiles are
 ``s + 7`` apart, joined along the arms by ``s`` edge tiles, so a Hamiltonian path costs exactly
 ``(s + 7)(|V| - 1) + 20 |V|``; a walk that has to come back through a vertex walks an edge
-twice, ``s + 7`` more than the bound and more than the at most 8 it can save in the gadgets it
-cuts short. The numbers are checked by exhaustive search in the tests (docs/generators.md).
+twice, ``s + 7`` more, and saves only part of it in the gadgets it cuts short (three vertices in
+a row started in the middle: the bound plus ``s + 3``). The numbers are checked by exhaustive
+search in the tests (docs/generators.md).
 
 The robot's start vertex is part of the instance: the bound is met exactly when a Hamiltonian
 path *from that vertex* exists. By default it is a vertex of degree 1 if there is one (every
