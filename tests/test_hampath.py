@@ -30,9 +30,9 @@ def _optimum_is_bound(inst) -> bool:
     found = search_optimum(inst, inst.meta["bound"])
     if found is None:
         return False
-    report = validate(inst, Schedule((tuple(found),)))
+    report = validate(inst, found)
     assert report.violation is None
-    assert report.metrics.makespan == len(found) == inst.meta["bound"]
+    assert report.metrics.makespan == found.length == inst.meta["bound"]
     return True
 
 
@@ -54,8 +54,8 @@ def test_without_a_path_the_optimum_is_above_the_bound_by_the_detour():
     # the middle of three in a row: the robot must come back through its start vertex
     inst = reduction(grid_graph(PATH3), 1, start=(1, 0))
     found = search_optimum(inst, inst.meta["bound"] + 8)
-    assert found is not None and validate(inst, Schedule((tuple(found),))).violation is None
-    assert len(found) == inst.meta["bound"] + 4
+    assert found is not None and validate(inst, found).violation is None
+    assert found.length == inst.meta["bound"] + 4
 
 
 def test_the_gadget_takes_t_g_steps_under_the_full_rules():
@@ -90,7 +90,7 @@ def test_corollary_copies_run_the_one_robot_schedule_side_by_side():
     xs = sorted(r.front[0] for r in many.robots)
     assert all(b - a > many.meta["bound"] for a, b in zip(xs, xs[1:]))
     found = search_optimum(one, one.meta["bound"])
-    report = validate(many, Schedule((tuple(found),) * 3))
+    report = validate(many, Schedule(found.actions * 3))
     assert report.violation is None and report.metrics.makespan == many.meta["bound"]
 
 

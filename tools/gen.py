@@ -149,7 +149,7 @@ def gen_hampath(graph_file, vertices, scale, start, robots, moveset, search, see
         if robots != 1 or inst.meta["bound"] is None:
             raise click.UsageError("--search takes one robot with the point moveset")
         found = search_optimum(inst, inst.meta["bound"])
-        inst.meta["optimal_is_bound"] = found is not None and len(found) == inst.meta["bound"]
+        inst.meta["optimal_is_bound"] = found is not None and found.length == inst.meta["bound"]
     return _output(inst, output, as_json)
 
 

@@ -39,13 +39,11 @@ each.
 """
 from __future__ import annotations
 
-from collections import deque
-
 import networkx as nx
 import numpy as np
 
 from ..errors import InstanceError
-from ..grid import Grid
+from ..grid import Grid, neighbour_table
 from ..instance import Instance, Robot, check_instance
 from ..moveset import Kind, load_moveset
 from ..rules import State, apply
@@ -152,8 +150,8 @@ def _grid(width: int, height: int, cells) -> Grid:
 # exhaustive search over the single robot's states, for the reductions' small cases
 
 def search_optimum(inst: Instance, limit: int, *, max_states: int = 2_000_000):
-    """An optimal schedule of a one-robot instance, as a list of action names, if its makespan
-    is at most ``limit``; ``None`` when no schedule of at most ``limit`` steps exists.
+    """An optimal schedule of a one-robot instance if its makespan is at most ``limit``;
+    ``None`` when no schedule of at most ``limit`` steps exists.
 
     Breadth-first over the robot's states under the canonical rules, with picks and places only
     on the cells where start and goal differ (the task cells: a manipulation elsewhere has to be
@@ -166,26 +164,31 @@ def search_optimum(inst: Instance, limit: int, *, max_states: int = 2_000_000):
     Raises :class:`InstanceError` for more than one robot, a robot that is not ``point``, or a
     task cell with other than one tile neighbour, and when ``max_states`` are stored.
     """
+    from bille.heuristics.walking import Walk
+    from bille.solvers.schedule import Schedule
+
     if inst.num_robots != 1 or inst.movesets[0].footprint != "point":
         raise InstanceError("search_optimum: one point robot only")
-    world, w = inst.world, inst.width
+    world = inst.world
     graph = world.graphs[0]
     start_tiles, goal = inst.start.tiles, inst.goal_tiles
     walk = start_tiles | goal
     task_set = {int(c) for c in np.flatnonzero(start_tiles != goal)}
+    nbr = neighbour_table(inst.width, inst.height)
     site = {}
     for c in sorted(task_set):
-        around = [m for m in _neighbours(c, w, inst.height) if walk[m] and m not in task_set]
+        around = [m for m in nbr[c].tolist() if m >= 0 and walk[m] and m not in task_set]
         if len(around) != 1:
             raise InstanceError(f"search_optimum: task cell {world.xy(c)} has {len(around)} tile neighbours, not 1")
         site[c] = around[0]
-    dist = {s: _distances(s, walk, w, inst.height) for s in set(site.values())}
+    # a point robot's pose is its cell, and its walks are symmetric: distances from a site
+    walking = Walk(graph, walk)
+    dist = {q: walking.distances(q) for q in set(site.values())}
 
     def h(state: State) -> int:
         differ = [c for c in task_set if state.tiles[c] != goal[c]]
         need = sorted({site[c] for c in differ})
-        pos = int(graph.feet[state.poses[0], 0])
-        return len(differ) + _mst([pos] + need, dist)
+        return len(differ) + _mst([state.poses[0]] + need, dist)
 
     root = inst.start_state
     if h(root) > limit:
@@ -195,8 +198,7 @@ def search_optimum(inst: Instance, limit: int, *, max_states: int = 2_000_000):
     while frontier:
         for s in frontier:
             if not s.carrying[0] and np.array_equal(s.tiles, goal):
-                names = inst.movesets[0].names
-                return [names[a] for a in _unwind(parent, s)]
+                return Schedule.from_ids(inst, [_unwind(parent, s)], meta={"method": "search"})
         if depth == limit:
             return None
         nxt = []
@@ -221,34 +223,17 @@ def search_optimum(inst: Instance, limit: int, *, max_states: int = 2_000_000):
     return None
 
 
-def _neighbours(c: int, w: int, h: int):
-    x, y = c % w, c // w
-    return [(y + dy) * w + x + dx for dx, dy in ((1, 0), (-1, 0), (0, 1), (0, -1)) if 0 <= x + dx < w and 0 <= y + dy < h]
-
-
-def _distances(src: int, walk: np.ndarray, w: int, h: int) -> dict:
-    dist, queue = {src: 0}, deque([src])
-    while queue:
-        c = queue.popleft()
-        for m in _neighbours(c, w, h):
-            if walk[m] and m not in dist:
-                dist[m] = dist[c] + 1
-                queue.append(m)
-    return dist
-
-
 def _mst(points: list, dist: dict) -> int:
     """Prim's minimum spanning tree weight; ``points[0]`` is the robot, the rest are sites."""
     if len(points) <= 1:
         return 0
-    inf = float("inf")
-    best = {q: dist[q].get(points[0], inf) for q in points[1:]}
+    best = {q: int(dist[q][points[0]]) for q in points[1:]}
     total = 0
     while best:
         q = min(best, key=best.get)
         total += best.pop(q)
         for r in best:
-            best[r] = min(best[r], dist[q].get(r, inf))
+            best[r] = min(best[r], int(dist[q][r]))
     return total
 
 
