@@ -50,11 +50,20 @@ class OutOfTime(Exception):
 
 @dataclass(frozen=True)
 class Options:
-    """How to build the model: pruning switches and the connectivity encoding."""
+    """How to build the model: pruning switches, the connectivity encoding, and one restriction.
+
+    ``single_carry`` restricts the schedules to those that carry every tile once, straight from
+    its start cell to its goal cell: a tile is picked only from a cell that holds one in the start
+    and not in the goal, and placed only on a cell that holds one in the goal and not in the
+    start (no tile is set down on the way, handed over, or moved out of the structure and back).
+    It is the baseline of the cooperative gadget (docs/generators.md), whose optimum needs a
+    hand-over.
+    """
 
     prune_reach: bool = True
     prune_cells: bool = True
     connectivity: str = "eager"
+    single_carry: bool = False
 
 
 @dataclass
@@ -173,8 +182,8 @@ class _Builder:
     def _candidate_cells(self) -> None:
         """Cells that may hold a tile at some time."""
         inst, n = self.inst, self.world.width * self.world.height
-        cand = inst.start.tiles | inst.goal_tiles
-        if self.opt.prune_cells:
+        cand = inst.start.tiles | inst.goal_tiles  # with single_carry, all of them
+        if self.opt.prune_cells and not self.opt.single_carry:
             for i, g in enumerate(self.world.graphs):
                 seen = np.zeros(g.num_poses, bool)
                 for mask in self.R[i]:
@@ -183,7 +192,7 @@ class _Builder:
                 if len(places):
                     t = g.target[seen][:, places]
                     cand[t[t >= 0]] = True
-        else:
+        elif not self.opt.single_carry:
             cand = ~self.world.obstacles.copy()
         cand &= ~self.world.obstacles
         self.cand = cand
@@ -227,8 +236,15 @@ class _Builder:
                     m.tile[(t, c)] = self.const(bool(start[c]))
                 elif t >= hi:
                     m.tile[(t, c)] = self.const(bool(goal[c]))
+                elif self.opt.single_carry and start[c] == goal[c]:
+                    m.tile[(t, c)] = self.const(bool(goal[c]))
                 else:
                     m.tile[(t, c)] = m.var(("tile", t, c))
+            if self.opt.single_carry and start[c] != goal[c]:
+                # the cell changes once, from its start value to its goal value
+                for t in range(1, T + 1):
+                    before, after = m.tile[(t - 1, c)], m.tile[(t, c)]
+                    m.clauses.append([-before, after] if goal[c] else [before, -after])
         self.carry = {}
         for i in range(inst.num_robots):
             for t in range(T + 1):

@@ -2,6 +2,7 @@
 
 Makespan search: from the lower bound upward, horizon ``T = LB, LB + 1, ...`` until the model is
 satisfiable; optimality is proved by infeasibility at ``T - 1`` (or ``T`` equal to the bound).
+CP-SAT may instead start from a guess (``first_horizon``) and go down while satisfiable.
 CP-SAT builds the model for each ``T`` (pruning is tightest for the exact horizon); SAT builds it
 once for a range of horizons and searches by assumptions (``done[k]``: every robot waits after
 step ``k``), incrementally, rebuilding only when the range is exhausted. With lazy connectivity
@@ -46,7 +47,7 @@ def default_cap(lower: int) -> int:
 def plan_cpsat(instance: Instance, *, time_limit: float | None = None, threads: int = 1, seed: int = 0,
                presolve: bool = False,
                max_makespan: int | None = None, connectivity: str = "eager", minimize_travel: bool = True,
-               prune: bool = True) -> Result:
+               prune: bool = True, single_carry: bool = False, first_horizon: int | None = None) -> Result:
     """Optimal makespan with OR-Tools CP-SAT.
 
     Parameters
@@ -62,25 +63,34 @@ def plan_cpsat(instance: Instance, *, time_limit: float | None = None, threads: 
         or ``lazy`` (cuts on demand).
     minimize_travel : then minimize tiles traveled at the optimal makespan.
     prune : reachability and candidate-cell pruning (switch off to measure them).
+    single_carry : only schedules that carry every tile once, from a start-only cell straight to
+        a goal-only cell (no hand-over): the best such makespan (see ``encodings.model.Options``).
+    first_horizon : a guess of the optimal makespan: the search starts there, going down while
+        schedules are found and up while none is, instead of up from the lower bound (each
+        horizon below the optimum costs a proof of infeasibility; one at ``T - 1`` is enough).
     """
+    if first_horizon is not None and first_horizon < 1:
+        raise OptionError(f"cpsat: first_horizon must be at least 1, got {first_horizon}")
     return _Search("cpsat", instance, time_limit, max_makespan, connectivity, minimize_travel, prune,
-                   threads=threads, seed=seed, presolve=presolve).run()
+                   single_carry, threads=threads, seed=seed, presolve=presolve,
+                   first_horizon=first_horizon).run()
 
 
 def plan_sat(instance: Instance, *, time_limit: float | None = None, max_makespan: int | None = None,
              connectivity: str = "eager", minimize_travel: bool = True, prune: bool = True,
-             solver: str = "cadical195", chunk: int = 8) -> Result:
+             single_carry: bool = False, solver: str = "cadical195", chunk: int = 8) -> Result:
     """Optimal makespan with a SAT solver of python-sat, incremental with assumptions.
 
     Parameters are those of :func:`plan_cpsat`, and: ``solver`` (a python-sat solver name),
     ``chunk`` (how many horizons one model covers before it is rebuilt larger).
     """
     return _Search("sat", instance, time_limit, max_makespan, connectivity, minimize_travel, prune,
-                   solver=solver, chunk=chunk).run()
+                   single_carry, solver=solver, chunk=chunk).run()
 
 
 class _Search:
-    def __init__(self, method, instance, time_limit, max_makespan, connectivity, minimize_travel, prune, **kw):
+    def __init__(self, method, instance, time_limit, max_makespan, connectivity, minimize_travel, prune,
+                 single_carry, **kw):
         if time_limit is not None and time_limit <= 0:
             raise OptionError(f"{method}: the time limit must be positive, got {time_limit}")
         if connectivity not in CONNECTIVITY:
@@ -90,7 +100,8 @@ class _Search:
         self.method, self.instance, self.kw = method, instance, kw
         self.start = time.perf_counter()
         self.deadline = None if time_limit is None else self.start + time_limit
-        self.options = Options(prune_reach=prune, prune_cells=prune, connectivity=connectivity)
+        self.options = Options(prune_reach=prune, prune_cells=prune, connectivity=connectivity,
+                               single_carry=single_carry)
         self.minimize_travel = minimize_travel
         self.incumbent: np.ndarray | None = None
         self.bounds = lower_bound(instance)
@@ -100,6 +111,8 @@ class _Search:
                               f"{self.bounds.lower} ({_parts(self.bounds.parts)})")
         self.stats = {"lower_bound": self.bounds.lower, "bound_parts": self.bounds.parts, "horizon_cap": self.cap,
                       "connectivity": connectivity, "pruning": prune, "cuts": 0, "horizons": []}
+        if single_carry:
+            self.stats["single_carry"] = True
 
     def left(self) -> float | None:
         return None if self.deadline is None else self.deadline - time.perf_counter()
@@ -156,13 +169,20 @@ class _Search:
     # ---- CP-SAT: one model per horizon --------------------------------------------------------
 
     def _cpsat(self) -> Result:
-        for T in range(max(1, self.bounds.lower), self.cap + 1):
+        """Horizons upward from the lower bound; from ``first_horizon`` if given, downward while
+        satisfiable (a schedule of ``T`` steps also fits ``T + 1``: infeasible at ``T - 1``
+        proves the ones below too)."""
+        lower = max(1, self.bounds.lower)
+        first = self.kw.get("first_horizon")
+        T = lower if first is None else min(max(lower, first), self.cap)
+        found, proved_below = None, lower  # the smallest satisfiable horizon; no schedule below this
+        while T <= self.cap:
             try:
                 model = build(self.instance, T, self.options, deadline=self.deadline)
                 backend = CpSatBackend(model, self.kw["threads"], self.kw["seed"], deadline=self.deadline,
                                        presolve=self.kw["presolve"])
             except OutOfTime:
-                return self.timeout(T)
+                return self.timeout(proved_below)
             self.stats["horizons"].append({"T": T, **model.size()})
             began = time.perf_counter()
             while True:
@@ -171,13 +191,24 @@ class _Search:
                     break
             self.stats["horizons"][-1].update(answer=status, time_s=round(time.perf_counter() - began, 3))
             if status == UNKNOWN:
-                return self.timeout(T)
-            if status == SAT:
-                ids = decode(model, self.instance, backend.value)
-                ids = self._cpsat_travel(backend, model, ids)
-                self.stats["solver"] = backend.stats
-                return self.result("optimal", ids, lower=T)
-        return self._infeasible()
+                return self.timeout(proved_below)
+            if status == UNSAT:
+                proved_below = T + 1
+                if found is not None:
+                    break
+                T += 1
+                continue
+            found = (model, backend)
+            self.incumbent = decode(model, self.instance, backend.value)
+            if T <= proved_below:
+                break
+            T -= 1
+        if found is None:
+            return self._infeasible()
+        model, backend = found
+        ids = self._cpsat_travel(backend, model, self.incumbent)
+        self.stats["solver"] = backend.stats
+        return self.result("optimal", ids, lower=model.T)
 
     def _cpsat_travel(self, backend, model, ids):
         self.stats["tiles_traveled_optimal"] = False

@@ -1,5 +1,7 @@
 import os
 
+import pytest
+
 from hypothesis import HealthCheck, settings
 
 # Deterministic property tests: the same examples on every run and machine.
@@ -9,3 +11,28 @@ settings.register_profile(
 )
 settings.register_profile("thorough", deadline=None, max_examples=2000, suppress_health_check=[HealthCheck.too_slow])
 settings.load_profile(os.environ.get("BILLE_HYPOTHESIS", "default"))
+
+
+@pytest.fixture
+def cli():
+    """``cli(argv)``: the command line's exit code for the argument list."""
+    from bille.tools.cli import main
+
+    def run(argv) -> int:
+        with pytest.raises(SystemExit) as exc:
+            main([str(a) for a in argv])
+        return exc.value.code
+    return run
+
+
+@pytest.fixture
+def rejects(cli, capsys):
+    """``rejects(argv, message, out)``: the arguments (with ``-o out``) are bad input: exit 2,
+    one line on stderr that contains ``message``, and nothing written to ``out``."""
+    def check(argv, message, out) -> None:
+        capsys.readouterr()
+        assert cli([*argv, "-o", out]) == 2
+        err = capsys.readouterr().err
+        assert message in err and len(err.strip().splitlines()) == 1
+        assert not out.exists()
+    return check

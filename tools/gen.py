@@ -115,13 +115,13 @@ def _graph(graph_file, vertices, seed):
     return g
 
 
-def _vertex(text: str | None):
+def _vertex(text: str | None, option: str = "--start"):
     if text is None:
         return None
     try:
         x, y = (int(v) for v in text.split(","))
     except ValueError:
-        raise click.BadParameter(f"expected X,Y (two integers), got {text!r}", param_hint="--start") from None
+        raise click.BadParameter(f"expected X,Y (two integers), got {text!r}", param_hint=option) from None
     return (x, y)
 
 
@@ -150,6 +150,43 @@ def gen_hampath(graph_file, vertices, scale, start, robots, moveset, search, see
             raise click.UsageError("--search takes one robot with the point moveset")
         found = search_optimum(inst, inst.meta["bound"])
         inst.meta["optimal_is_bound"] = found is not None and found.length == inst.meta["bound"]
+    return _output(inst, output, as_json)
+
+
+@gen.command("coop")
+@click.argument("graph_file", metavar="GRAPH", required=False)
+@click.option("--vertices", type=int, help="Attach to a random connected grid graph of this many vertices.")
+@click.option("--scale", "-s", type=click.IntRange(min=1), default=1, show_default=True,
+              help="Edge tiles between two vertex gadgets (with a graph).")
+@click.option("--start", metavar="X,Y", help="The vertex robot 1 starts at (with a graph).")
+@click.option("--end", metavar="X,Y", help="The vertex whose upper arm leads to the gadget; no vertex may be above "
+                                           "it (default: such a vertex of degree 1 if there is one).")
+@click.option("--gap", type=click.IntRange(min=2), default=2, show_default=True,
+              help="Cells from an entry to its side's nearest small task.")
+@click.option("--search", is_flag=True, help="With a graph: also find each robot's earliest arrival at the gadget by "
+                                             "exhaustive search (small graphs only).")
+@common
+def gen_coop(graph_file, vertices, scale, start, end, gap, search, seed, output, as_json) -> int:
+    """Theorem 2's cooperative gadget: alone (no GRAPH), or attached to Theorem 1's
+    construction for GRAPH; the metadata give the arrival time and the bound."""
+    from bille.instances.generators.coop import approaches, attached, gadget
+
+    if graph_file is None and vertices is None:
+        if start or end or search:
+            raise click.UsageError("--start, --end and --search need a GRAPH or --vertices")
+        return _output(gadget(gap), output, as_json)
+    g = _graph(graph_file, vertices, seed)
+    kw = {"start": _vertex(start), "end": _vertex(end, "--end"), "gap": gap}
+    inst = attached(g, scale, **kw)
+    if search:
+        from bille.instances.generators.hampath import search_optimum
+
+        arrivals = []
+        for way in approaches(g, scale, **kw):
+            found = search_optimum(way, inst.meta["arrival"])
+            arrivals.append(None if found is None else found.length)
+        inst.meta["arrivals_within_bound"] = arrivals
+        inst.meta["on_time"] = arrivals == [inst.meta["arrival"]] * 2
     return _output(inst, output, as_json)
 
 

@@ -104,8 +104,9 @@ def draw_graph(g: nx.Graph) -> str:
                      for y in range(min(ys), max(ys) + 1)) + "\n"
 
 
-def hamiltonian_path(g: nx.Graph, start: XY | None = None) -> list[XY] | None:
-    """A Hamiltonian path of ``g`` (starting at ``start`` if given), or None if there is none.
+def hamiltonian_path(g: nx.Graph, start: XY | None = None, end: XY | None = None) -> list[XY] | None:
+    """A Hamiltonian path of ``g`` (starting at ``start`` and ending at ``end`` if given), or None
+    if there is none.
 
     Backtracking from each possible first vertex (a vertex of degree 1 if there is one: it must
     be an end), extending along unvisited neighbours, fewest onward choices first (Warnsdorff's
@@ -116,12 +117,26 @@ def hamiltonian_path(g: nx.Graph, start: XY | None = None) -> list[XY] | None:
     True
     >>> hamiltonian_path(grid_graph([(0, 0), (1, 0), (1, 1)]))
     [(0, 0), (1, 0), (1, 1)]
+    >>> hamiltonian_path(grid_graph([(0, 0), (1, 0), (1, 1)]), end=(0, 0))
+    [(1, 1), (1, 0), (0, 0)]
+
+    A fixed end is a fixed start with one more vertex: a leaf hung on ``end``, which every
+    Hamiltonian path of the larger graph has at its other end.
     """
     n = g.number_of_nodes()
     if n == 0 or not nx.is_connected(g):
         return None
-    if start is not None and start not in g:
-        raise InstanceError(f"the start vertex {start} is not a vertex of the graph")
+    for name, v in (("start", start), ("end", end)):
+        if v is not None and v not in g:
+            raise InstanceError(f"the {name} vertex {v} is not a vertex of the graph")
+    if end is not None:
+        if end == start:
+            return [end] if n == 1 else None
+        leaf = ("end", end)
+        path = hamiltonian_path(nx.Graph([*g.edges, (end, leaf)]) if n > 1 else nx.Graph([(end, leaf)]), start)
+        if path is not None and path[0] == leaf:
+            path.reverse()
+        return None if path is None else path[:-1]
     leaves = [v for v in g if g.degree(v) == 1]
     if len(leaves) > 2 or (start is not None and leaves and start not in leaves and len(leaves) == 2):
         return None

@@ -66,6 +66,16 @@ def bound(vertices: int, scale: int) -> int:
     return (scale + 2 * HALF + 1) * (vertices - 1) + T_G * vertices
 
 
+def check_graph(g: nx.Graph, scale: int) -> None:
+    """Raise :class:`InstanceError` for an empty or disconnected graph or a scale below 1."""
+    if g.number_of_nodes() == 0:
+        raise InstanceError("the graph has no vertices")
+    if not nx.is_connected(g):
+        raise InstanceError(f"the graph is not connected ({nx.number_connected_components(g)} parts)")
+    if scale < 1:
+        raise InstanceError(f"the scale must be at least 1, got {scale}")
+
+
 def default_start(g: nx.Graph) -> XY:
     """A vertex of degree 1 if there is one (every Hamiltonian path ends there), else the first
     vertex, both in reading order (by ``y``, then ``x``)."""
@@ -80,51 +90,32 @@ def reduction(g: nx.Graph, scale: int, *, start: XY | None = None, robots: int =
     Raises :class:`InstanceError` for an empty or disconnected graph, a scale below 1, fewer
     than one robot, or a start that is not a vertex.
     """
-    if g.number_of_nodes() == 0:
-        raise InstanceError("the graph has no vertices")
-    if not nx.is_connected(g):
-        raise InstanceError(f"the graph is not connected ({nx.number_connected_components(g)} parts)")
-    if scale < 1:
-        raise InstanceError(f"the scale must be at least 1, got {scale}")
+    check_graph(g, scale)
     if robots < 1:
         raise InstanceError(f"at least 1 robot, got {robots}")
     start = default_start(g) if start is None else tuple(start)
     if start not in g:
         raise InstanceError(f"the start vertex {start} is not a vertex of the graph")
     ms = load_moveset(moveset)
-    pitch = scale + 2 * HALF + 1
-    xs, ys = [x for x, _ in g.nodes], [y for _, y in g.nodes]
-    copy_w = 2 * HALF + 1 + (max(xs) - min(xs)) * pitch
-    copy_h = 2 * HALF + 1 + (max(ys) - min(ys)) * pitch
     n = g.number_of_nodes()
     best = bound(n, scale)
+    one = Layout(g, scale)
     gap = best + 1 if robots > 1 else 0
     top = 2 if robots > 1 else 0                 # the line joining the copies runs along row 0
-    width, height = robots * copy_w + (robots - 1) * gap, top + copy_h
-
-    def centre(v: XY, k: int) -> XY:
-        return (k * (copy_w + gap) + HALF + (v[0] - min(xs)) * pitch, top + HALF + (v[1] - min(ys)) * pitch)
-
+    width, height = robots * one.width + (robots - 1) * gap, top + one.height
     anchor = min(g.nodes, key=lambda v: (v[1], v[0]))
     base, tiles_only, goal_only, placed = set(), set(), set(), []
-    for k in range(robots):
-        for v in g.nodes:
-            cx, cy = centre(v, k)
-            base |= {(cx + dx, cy + dy) for dx, dy in CROSS | RING}
-            tiles_only |= {(cx + tx, cy + ty) for _, (tx, ty), _ in CORNERS}
-            goal_only |= {(cx + px, cy + py) for _, _, (px, py) in CORNERS}
-        for u, v in g.edges:
-            (ux, uy), (vx, vy) = sorted((centre(u, k), centre(v, k)))
-            base |= {(x, uy) for x in range(ux + HALF + 1, vx - HALF)} if uy == vy else \
-                    {(ux, y) for y in range(uy + HALF + 1, vy - HALF)}
-        cx, cy = centre(start, k)
-        front = (cx + ROBOT_CORNER[0], cy + ROBOT_CORNER[1])
+    copies = [Layout(g, scale, k * (one.width + gap), top) for k in range(robots)]
+    for copy in copies:
+        base |= copy.base
+        tiles_only |= copy.tiles_only
+        goal_only |= copy.goal_only
+        front = copy.robot_cell(start)
         placed.append(Robot(front) if ms.footprint == "point" else Robot(front, (front[0] - 1, front[1])))
         if robots > 1:   # down from the joining line to the upper arm of a top vertex (free: none above)
-            ax, ay = centre(anchor, k)
-            base |= {(ax, y) for y in range(0, ay - HALF)}
+            base |= copy.up_from(anchor, 0)
     if robots > 1:
-        base |= {(x, 0) for x in range(centre(anchor, 0)[0], centre(anchor, robots - 1)[0] + 1)}
+        base |= {(x, 0) for x in range(copies[0].centre(anchor)[0], copies[-1].centre(anchor)[0] + 1)}
     path = hamiltonian_path(g, start=start)
     point = ms.footprint == "point"
     meta = {"generator": "hampath", "theorem": "1" if robots == 1 else "corollary 1", "scale": scale,
@@ -139,6 +130,44 @@ def reduction(g: nx.Graph, scale: int, *, start: XY | None = None, robots: int =
         meta=meta))
 
 
+class Layout:
+    """The cells of one copy of Theorem 1's construction for ``g``, its top left corner at
+    ``(left, top)``: ``base`` (tiles of start and goal), ``tiles_only`` (task tiles) and
+    ``goal_only`` (task positions)."""
+
+    def __init__(self, g: nx.Graph, scale: int, left: int = 0, top: int = 0) -> None:
+        self.pitch = scale + 2 * HALF + 1
+        xs, ys = [x for x, _ in g.nodes], [y for _, y in g.nodes]
+        self.origin = (left + HALF - min(xs) * self.pitch, top + HALF - min(ys) * self.pitch)
+        self.width = 2 * HALF + 1 + (max(xs) - min(xs)) * self.pitch
+        self.height = 2 * HALF + 1 + (max(ys) - min(ys)) * self.pitch
+        self.base, self.tiles_only, self.goal_only = set(), set(), set()
+        for v in g.nodes:
+            cx, cy = self.centre(v)
+            self.base |= {(cx + dx, cy + dy) for dx, dy in CROSS | RING}
+            self.tiles_only |= {(cx + tx, cy + ty) for _, (tx, ty), _ in CORNERS}
+            self.goal_only |= {(cx + px, cy + py) for _, _, (px, py) in CORNERS}
+        for u, v in g.edges:
+            (ux, uy), (vx, vy) = sorted((self.centre(u), self.centre(v)))
+            self.base |= {(x, uy) for x in range(ux + HALF + 1, vx - HALF)} if uy == vy else \
+                         {(ux, y) for y in range(uy + HALF + 1, vy - HALF)}
+
+    def centre(self, v: XY) -> XY:
+        """The cell of vertex ``v``'s vertex tile."""
+        return (self.origin[0] + v[0] * self.pitch, self.origin[1] + v[1] * self.pitch)
+
+    def robot_cell(self, v: XY) -> XY:
+        """Where a robot starting at vertex ``v`` stands: a corner of its ring."""
+        cx, cy = self.centre(v)
+        return (cx + ROBOT_CORNER[0], cy + ROBOT_CORNER[1])
+
+    def up_from(self, v: XY, row: int) -> set[XY]:
+        """A line of tiles from the tip of ``v``'s upper arm up to ``row`` (exclusive of the
+        tip; ``v`` must have no vertex above it, so the line touches nothing else)."""
+        cx, cy = self.centre(v)
+        return {(cx, y) for y in range(row, cy - HALF)}
+
+
 def _grid(width: int, height: int, cells) -> Grid:
     tiles = np.zeros(width * height, dtype=bool)
     for x, y in cells:
@@ -151,7 +180,7 @@ def _grid(width: int, height: int, cells) -> Grid:
 
 def search_optimum(inst: Instance, limit: int, *, max_states: int = 2_000_000):
     """An optimal schedule of a one-robot instance if its makespan is at most ``limit``;
-    ``None`` when no schedule of at most ``limit`` steps exists.
+    ``None`` when no schedule of at most ``limit`` steps exists. A goal cell of the robot counts.
 
     Breadth-first over the robot's states under the canonical rules, with picks and places only
     on the cells where start and goal differ (the task cells: a manipulation elsewhere has to be
@@ -159,7 +188,8 @@ def search_optimum(inst: Instance, limit: int, *, max_states: int = 2_000_000):
     whose steps so far plus a lower bound on the steps still needed exceed ``limit``. The lower
     bound counts one manipulation per cell that still differs from the goal and the weight of a
     minimum spanning tree joining the robot with the site of every such cell (the one tile a
-    robot can stand on next to it), by walking distances over the start and goal tiles together.
+    robot can stand on next to it) and its goal cell, by walking distances over the start and goal
+    tiles together.
 
     Raises :class:`InstanceError` for more than one robot, a robot that is not ``point``, or a
     task cell with other than one tile neighbour, and when ``max_states`` are stored.
@@ -183,12 +213,18 @@ def search_optimum(inst: Instance, limit: int, *, max_states: int = 2_000_000):
         site[c] = around[0]
     # a point robot's pose is its cell, and its walks are symmetric: distances from a site
     walking = Walk(graph, walk)
-    dist = {q: walking.distances(q) for q in set(site.values())}
+    end = int(inst.goal_cells[0])
+    ends = [end] if end >= 0 else []
+    dist = {q: walking.distances(q) for q in set(site.values()) | set(ends)}
 
     def h(state: State) -> int:
         differ = [c for c in task_set if state.tiles[c] != goal[c]]
-        need = sorted({site[c] for c in differ})
+        need = sorted({site[c] for c in differ} | set(ends))
         return len(differ) + _mst([state.poses[0]] + need, dist)
+
+    def done(state: State) -> bool:
+        return (not state.carrying[0] and np.array_equal(state.tiles, goal)
+                and (end < 0 or state.poses[0] == end))
 
     root = inst.start_state
     if h(root) > limit:
@@ -197,7 +233,7 @@ def search_optimum(inst: Instance, limit: int, *, max_states: int = 2_000_000):
     frontier, depth = [root], 0
     while frontier:
         for s in frontier:
-            if not s.carrying[0] and np.array_equal(s.tiles, goal):
+            if done(s):
                 return Schedule.from_ids(inst, [_unwind(parent, s)], meta={"method": "search"})
         if depth == limit:
             return None

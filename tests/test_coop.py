@@ -1,0 +1,158 @@
+"""Theorem 2's cooperative gadget (``bille gen coop``), alone and attached to Theorem 1's
+construction."""
+from __future__ import annotations
+
+import itertools
+
+import networkx as nx
+import numpy as np
+import pytest
+
+from bille.instances import dump_instance, instance_from_text
+from bille.instances.generators.coop import LARGE, NO_SPLIT, SPLIT, approaches, attached, gadget
+from bille.instances.generators.graphs import grid_graph, hamiltonian_path, random_grid_graph
+from bille.instances.generators.hampath import bound, search_optimum
+from bille.instances.moveset import Kind
+from bille.instances.rules import State, apply
+from bille.solvers import solve, validate
+from bille.solvers.schedule import bind
+
+
+def _manipulations(inst, schedule) -> list[tuple[int, int, str, int]]:
+    """(step, robot, "pick" | "place", target cell) of every manipulation, in order."""
+    ids = bind(inst, schedule)
+    state, out = inst.start_state, []
+    for t in range(ids.shape[1]):
+        for i, g in enumerate(inst.world.graphs):
+            kind = g.kind[ids[i, t]]
+            if kind in (Kind.PICK, Kind.PLACE):
+                out.append((t, i, "pick" if kind == Kind.PICK else "place", int(g.target[state.poses[i], ids[i, t]])))
+        state = apply(inst.world, state, list(ids[:, t]))
+        assert isinstance(state, State)
+    return out
+
+
+def _carries_once(inst, schedule) -> bool:
+    """Every pick on a cell that holds a tile in the start only, every place on one that holds
+    a tile in the goal only: each tile is carried once, straight to its goal."""
+    start, goal = inst.start.tiles, inst.goal_tiles
+    return all((start[c] and not goal[c]) if what == "pick" else (goal[c] and not start[c])
+               for _, _, what, c in _manipulations(inst, schedule))
+
+
+def test_the_gadget_has_the_papers_tasks():
+    inst = instance_from_text(dump_instance(gadget()))
+    start, goal = inst.start.tiles, inst.goal_tiles
+    tiles = [inst.world.xy(c) for c in np.flatnonzero(start & ~goal)]
+    places = [inst.world.xy(c) for c in np.flatnonzero(goal & ~start)]
+    assert len(tiles) == len(places) == 7 and inst.num_robots == 2
+    # six small tasks (a tile two cells from its position) and one large (eight cells)
+    small = [(x, y) for x, y in tiles if (x, y + 2) in places]
+    assert len(small) == 6
+    (large,) = set(tiles) - set(small)
+    (target,) = set(places) - {(x, y + 2) for x, y in small}
+    assert abs(large[0] - target[0]) + abs(large[1] - target[1]) == LARGE
+    assert [r.front for r in inst.robots] == [(large[0], large[1] + 1), (target[0], target[1] + 1)]
+
+
+def test_only_splitting_the_large_task_reaches_the_optimum():
+    """The best schedule that carries every tile once takes NO_SPLIT steps (proved: none within
+    NO_SPLIT - 1); the optimum, with hand-overs allowed, is SPLIT < NO_SPLIT (proved: none
+    within SPLIT - 1), so every optimal schedule sets a tile down on the way."""
+    inst = gadget()
+    alone = solve(inst, "cpsat", single_carry=True, first_horizon=NO_SPLIT, minimize_travel=False)
+    assert alone.status == "optimal" and alone.schedule.length == NO_SPLIT
+    assert validate(inst, alone.schedule).violation is None and _carries_once(inst, alone.schedule)
+    best = solve(inst, "cpsat", first_horizon=SPLIT, minimize_travel=False)
+    assert best.status == "optimal" and best.schedule.length == SPLIT < NO_SPLIT
+    assert [h["answer"] for h in best.stats["horizons"]] == ["sat", "unsat"]
+    assert validate(inst, best.schedule).violation is None and not _carries_once(inst, best.schedule)
+    # the schedule found hands the large task's tile over: set down by one robot, picked by the other
+    moves = _manipulations(inst, best.schedule)
+    goal_only = inst.goal_tiles & ~inst.start.tiles
+    drops = [(t, i, c) for t, i, what, c in moves if what == "place" and not goal_only[c]]
+    assert any(j != i and u > t and c == d for t, i, c in drops for u, j, what, d in moves if what == "pick")
+
+
+def _has_path(g: nx.Graph, start, end) -> bool:
+    rest = [v for v in g if v not in (start, end)]
+    if start == end:
+        return g.number_of_nodes() == 1
+    return any(all(g.has_edge(a, b) for a, b in zip((start,) + p, p + (end,))) for p in itertools.permutations(rest))
+
+
+@pytest.mark.parametrize("points, start, end", [
+    ([(0, 0)], None, None), ([(0, 0), (1, 0)], None, None),
+    ([(0, 0), (1, 0), (2, 0)], (0, 0), (2, 0)), ([(0, 0), (1, 0), (2, 0)], (1, 0), (2, 0)),
+    ([(0, 0), (1, 0), (2, 0)], (0, 0), (1, 0)), ([(0, 0), (1, 0), (1, 1)], (1, 1), (0, 0)),
+    ([(0, 0), (1, 0), (1, 1)], (0, 0), (1, 0))])
+def test_both_robots_reach_the_gadget_on_time_exactly_when_the_path_exists(points, start, end):
+    """Theorem 2's timing, by exhaustive search over each robot's way alone: robot 2's string
+    always brings it to its entry at ``arrival``; robot 1 comes as early only along a
+    Hamiltonian path from the start vertex to the end vertex."""
+    g = grid_graph(points)
+    inst = attached(g, 1, start=start, end=end)
+    start, end = tuple(inst.meta["start_vertex"]), tuple(inst.meta["end_vertex"])
+    exists = _has_path(g, start, end)
+    assert (inst.meta["hamiltonian_path"] is not None) == exists
+    assert inst.meta["bound"] == inst.meta["arrival"] + SPLIT
+    arrivals = []
+    for way in approaches(g, 1, start=start, end=end):
+        found = search_optimum(way, inst.meta["arrival"])
+        if found is not None:
+            report = validate(way, found)
+            assert report.violation is None and report.metrics.makespan == inst.meta["arrival"]
+        arrivals.append(found is not None)
+    assert arrivals == [exists, True]
+
+
+@pytest.mark.parametrize("seed", [0, 5])
+def test_attached_instances_of_random_graphs_are_valid_and_deterministic(seed):
+    g = random_grid_graph(6, seed)
+    text = dump_instance(attached(g, 2))
+    assert dump_instance(attached(g, 2)) == text
+    inst = instance_from_text(text)
+    n, ends = g.number_of_nodes(), (tuple(inst.meta["start_vertex"]), tuple(inst.meta["end_vertex"]))
+    assert inst.num_robots == 2
+    # Theorem 1's task tiles for the graph and for the string, and the gadget's seven
+    assert int((inst.start.tiles & ~inst.goal_tiles).sum()) == 4 * n * 2 + 7
+    assert inst.meta["arrival"] > bound(n, 2)
+    assert (inst.meta["hamiltonian_path"] is None) == (hamiltonian_path(g, *ends) is None)
+
+
+def test_hamiltonian_paths_between_two_vertices_agree_with_brute_force():
+    for seed in range(12):
+        g = random_grid_graph(1 + seed % 6, seed)
+        for start, end in itertools.product(sorted(g), repeat=2):
+            path = hamiltonian_path(g, start, end)
+            assert (path is not None) == _has_path(g, start, end)
+            if path is not None:
+                assert path[0] == start and path[-1] == end and sorted(path) == sorted(g)
+                assert all(g.has_edge(a, b) for a, b in zip(path, path[1:]))
+
+
+def test_gen_coop_on_the_command_line(tmp_path, capsys, cli):
+    out = tmp_path / "coop.yaml"
+    assert cli(["gen", "coop", "-o", str(out)]) == 0
+    assert instance_from_text(out.read_text()).meta["optimal_makespan"] == SPLIT
+    (tmp_path / "l.graph").write_text("oo\n.o\n")
+    capsys.readouterr()
+    assert cli(["gen", "coop", str(tmp_path / "l.graph"), "--search", "--json"]) == 0
+    assert '"on_time": true' in capsys.readouterr().out
+    assert cli(["gen", "coop", str(tmp_path / "l.graph"), "--start", "0,0", "--end", "1,0", "--search", "--json"]) == 0
+    assert '"on_time": false' in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["gen", "coop", "--start", "0,0"], "need a GRAPH"),
+    (["gen", "coop", "--gap", "1"], "1 is not in the range"),
+    (["gen", "coop", "{tmp}/l.graph", "--end", "1,1"], "has a vertex above it"),
+    (["gen", "coop", "{tmp}/l.graph", "--end", "7,7"], "not a vertex"),
+    (["gen", "coop", "{tmp}/l.graph", "--end", "y"], "expected X,Y"),
+    (["gen", "coop", "{tmp}/split.graph"], "not connected"),
+    (["gen", "coop", "{tmp}/l.graph", "--scale", "0"], "0 is not in the range"),
+])
+def test_bad_coop_input_is_one_line_and_exit_2(tmp_path, rejects, argv, message):
+    (tmp_path / "split.graph").write_text("o.o\n")
+    (tmp_path / "l.graph").write_text("oo\n.o\n")
+    rejects([a.replace("{tmp}", str(tmp_path)) for a in argv], message, tmp_path / "out.yaml")
