@@ -61,6 +61,26 @@ def test_cooperation_is_needed_and_found():
 
 
 @pytest.mark.parametrize("method", ["cpsat", "sat"])
+def test_single_carry_leaves_out_the_hand_over(method, optimum):
+    # carried once, straight from its start to its goal, the tile could not get past a robot
+    inst = TINY["handover"]()
+    assert solve(inst, method, single_carry=True, max_makespan=16).status == "infeasible"
+    plain = TINY["point-move-tile"]()
+    result = solve(plain, method, single_carry=True)
+    assert result.status == "optimal" and result.metrics.makespan == optimum("point-move-tile")
+    assert result.stats["single_carry"] and validate(plain, result.schedule).valid
+
+
+@pytest.mark.parametrize("first", [1, 4, 12])
+def test_a_first_horizon_above_or_below_finds_the_same_optimum(first, optimum):
+    for name in ("point-move-tile", "handover"):
+        inst = TINY[name]()
+        result = solve(inst, "cpsat", first_horizon=first)
+        assert result.status == "optimal" and validate(inst, result.schedule).valid
+        assert result.metrics.makespan == result.lower_bound == optimum(name)
+
+
+@pytest.mark.parametrize("method", ["cpsat", "sat"])
 def test_travel_is_minimized_at_the_optimal_makespan(method):
     inst = TINY["s7-two-robots"]()
     plain = solve(inst, method, minimize_travel=False)

@@ -165,16 +165,24 @@ def gen_hampath(graph_file, vertices, scale, start, robots, moveset, search, see
               help="Cells from an entry to its side's nearest small task.")
 @click.option("--search", is_flag=True, help="With a graph: also find each robot's earliest arrival at the gadget by "
                                              "exhaustive search (small graphs only).")
+@click.option("--schedule", "schedule_file", type=click.Path(dir_okay=False),
+              help="The gadget alone: also write the schedule that splits the large task here.")
 @common
-def gen_coop(graph_file, vertices, scale, start, end, gap, search, seed, output, as_json) -> int:
+def gen_coop(graph_file, vertices, scale, start, end, gap, search, schedule_file, seed, output, as_json) -> int:
     """Theorem 2's cooperative gadget: alone (no GRAPH), or attached to Theorem 1's
     construction for GRAPH; the metadata give the arrival time and the bound."""
-    from bille.instances.generators.coop import approaches, attached, gadget
+    from bille.instances.generators.coop import approaches, attached, demonstration, gadget
 
     if graph_file is None and vertices is None:
         if start or end or search:
             raise click.UsageError("--start, --end and --search need a GRAPH or --vertices")
+        if schedule_file:
+            from bille.solvers.schedule import Schedule, save_schedule
+
+            save_schedule(Schedule(demonstration(gap), meta={"method": "demonstration (gen coop)"}), schedule_file)
         return _output(gadget(gap), output, as_json)
+    if schedule_file:
+        raise click.UsageError("--schedule is for the gadget alone (no GRAPH)")
     g = _graph(graph_file, vertices, seed)
     kw = {"start": _vertex(start), "end": _vertex(end, "--end"), "gap": gap}
     inst = attached(g, scale, **kw)
