@@ -1,29 +1,33 @@
 """The paper's Theorem 2 (``bille gen coop``): a gadget that two robots solve fastest only by
 handing a tile over, alone and attached to Theorem 1's construction.
 
-The paper's figure is missing; this is our gadget (``y`` down, ``gap`` = 2 drawn)::
+The paper's figure is missing; this is our gadget (``y`` down, ``gap = 2`` drawn)::
 
     t . t . t . A . . . . . . . B . t . t . t     t  task tile: a tile in the start only
-    # # # # # # # # # # # # # # # # # # # # #     p  task position: a tile in the goal only
-    p . p . p . 1 . . . . . . . 2 . p . p . p     A  the large task's tile, B its position
-                                                  #  tiles of start and goal; 1, 2 the entries
+    # # # # # # 1 # # # # # # # 2 # # # # # #     p  task position: a tile in the goal only
+    p . p . p . : . . . . . . . : . p . p . p     A  the large task's tile, B its position
+                                                  #  tiles of start and goal
+                                                  1, 2  the robots' entries (attached: the
+                                                        lines from below end at ``:``)
 
 A line of tiles (the *bridge*) with three *small tasks* at each end: a tile above the line and a
 position below it, two apart, which a robot standing between them solves in two steps (pick,
-place). The *large task* moves tile ``A`` eight cells along the bridge to ``B``. Robot 1 enters
-at ``1`` below ``A``, robot 2 at ``2`` below ``B``; the small tasks begin ``gap`` cells beyond
-the entries, on the far sides.
+place). The *large task* moves tile ``A`` eight cells along the bridge to ``B``. Robot 1 starts
+on the bridge below ``A``, robot 2 below ``B``; the small tasks begin ``gap`` cells beyond them,
+on the far sides.
 
-Every tile that ends on the right comes from the left, and the bridge is the only way: some tile
-crosses those eight cells, and a tile crosses only when a robot carries it. Carried by one robot
-(robot 1 after its own small tasks, or straight away and then back), the crossing adds eight
-steps to that robot's work; split at the middle, robot 1 carries it four cells right at once and
-walks back to its small tasks while robot 2 waits for it, carries it on, and then does its own.
-The hand-over costs three steps (set down, step aside, step in, pick up: a point robot can only
-pick a tile next to it) but halves the crossing, so splitting wins once ``gap`` is at least 1,
-by ``min(gap, 4)`` steps in our counting. The tests measure the numbers with the exact solvers
-(docs/generators.md): with ``gap = 2`` the optimum is :data:`SPLIT` steps, and the best schedule
-that carries every tile once, straight from its start to its goal, takes :data:`NO_SPLIT`.
+Tiles are identical, but every tile that ends on the right comes from the left and only a robot
+carries one across, so some tile crosses the eight cells between ``A`` and ``B``. A robot that
+carries it all the way pays eight steps on top of its side's small tasks and has to do those
+first or walk back; the bridge has no cell to pass on, so the robots cannot trade sides cheaply.
+Split, robot 1 carries the tile part of the way at once, sets it down above the bridge and walks
+back to its tasks, while robot 2 solves a task first and then carries the tile on. A point robot
+picks only next to it, so the hand-over costs two steps (robot 1 steps off, robot 2 steps on).
+
+Measured (tests/test_coop.py, docs/generators.md), ``gap = 2``: the split schedule of
+:func:`demonstration` takes 24 steps; the best schedule that carries every tile once, straight
+from its start to its goal (the exact solvers' ``single_carry``), takes :data:`NO_SPLIT` = 28,
+proved by CP-SAT. So every optimal schedule splits the large task.
 """
 from __future__ import annotations
 
