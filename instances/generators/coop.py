@@ -37,7 +37,7 @@ from ..errors import InstanceError
 from ..instance import Instance, Robot, check_instance
 from ..moveset import load_moveset
 from .graphs import draw_graph, grid_graph, hamiltonian_path
-from .hampath import HALF, Layout, _grid, bound, check_graph
+from .hampath import HALF, T_G, Layout, bound, check_graph, tiles_grid
 
 XY = tuple[int, int]
 LARGE = 8                    # cells the large task moves its tile
@@ -95,8 +95,8 @@ def gadget(gap: int = 2, *, name: str | None = None) -> Instance:
             "small_tasks": 2 * len(SMALL), "split_makespan": len(demonstration(gap)[0]),
             "best_single_carry": NO_SPLIT if gap == 2 else None}
     return check_instance(Instance(
-        name or f"coop-gap{gap}", load_moveset("point"), _grid(g.width, 3, g.base | g.tiles_only),
-        tuple(Robot(e) for e in g.entries), goal=_grid(g.width, 3, g.base | g.goal_only), meta=meta))
+        name or f"coop-gap{gap}", load_moveset("point"), tiles_grid(g.width, 3, g.base | g.tiles_only),
+        tuple(Robot(e) for e in g.entries), goal=tiles_grid(g.width, 3, g.base | g.goal_only), meta=meta))
 
 
 def default_ends(g: nx.Graph, start: XY | None = None, end: XY | None = None) -> tuple[XY, XY]:
@@ -129,8 +129,8 @@ def attached(g: nx.Graph, scale: int, *, start: XY | None = None, end: XY | None
     entry by a line of tiles of the same length (see docs/generators.md).
 
     Both robots can stand on their entries at ``arrival`` (in the metadata) only if ``g`` has a
-    Hamiltonian path from ``start`` to ``end``; the optimal makespan is then ``bound`` =
-    ``arrival`` + the gadget's optimum. ``end`` must have no vertex above it: its upper arm
+    Hamiltonian path from ``start`` to ``end``; they can then finish by ``bound`` = ``arrival``
+    + the steps of :func:`demonstration`. ``end`` must have no vertex above it: its upper arm
     leads to the gadget. Raises :class:`InstanceError` for bad graphs, scales, vertices, gaps.
     """
     check_graph(g, scale)
@@ -146,7 +146,7 @@ def attached(g: nx.Graph, scale: int, *, start: XY | None = None, end: XY | None
     parts = _Parts(g, scale, end, gap)
     meta = {"generator": "coop", "theorem": "2", "scale": scale, "gap": gap, "vertices": n,
             "edges": g.number_of_edges(), "start_vertex": list(start), "end_vertex": list(end),
-            "graph": draw_graph(g), "t_g": 20, "arrival": parts.arrival,
+            "graph": draw_graph(g), "t_g": T_G, "arrival": parts.arrival,
             "bound": parts.arrival + len(demonstration(gap)[0])}
     path = hamiltonian_path(g, start=start, end=end)
     meta["hamiltonian_path"] = None if path is None else [list(v) for v in path]
@@ -155,8 +155,8 @@ def attached(g: nx.Graph, scale: int, *, start: XY | None = None, end: XY | None
     base = parts.base | parts.gadget.base
     return check_instance(Instance(
         name or f"coop-v{n}-s{scale}", load_moveset("point"),
-        _grid(w, h, base | parts.tiles_only | parts.gadget.tiles_only), robots,
-        goal=_grid(w, h, base | parts.goal_only | parts.gadget.goal_only), meta=meta))
+        tiles_grid(w, h, base | parts.tiles_only | parts.gadget.tiles_only), robots,
+        goal=tiles_grid(w, h, base | parts.goal_only | parts.gadget.goal_only), meta=meta))
 
 
 class _Parts:
@@ -202,7 +202,7 @@ def approaches(g: nx.Graph, scale: int, *, start: XY | None = None, end: XY | No
     for k, (layout, way) in enumerate(((parts.first, parts.ways[0]), (parts.second, parts.ways[1]))):
         base = layout.base | way
         out.append(check_instance(Instance(
-            f"{inst.name}-way{k + 1}", inst.moveset, _grid(w, h, base | layout.tiles_only),
-            (inst.robots[k],), goal=_grid(w, h, base | layout.goal_only),
+            f"{inst.name}-way{k + 1}", inst.moveset, tiles_grid(w, h, base | layout.tiles_only),
+            (inst.robots[k],), goal=tiles_grid(w, h, base | layout.goal_only),
             robot_goals=(parts.gadget.entries[k],), meta={"arrival": parts.arrival})))
     return out[0], out[1]

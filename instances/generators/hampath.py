@@ -126,7 +126,7 @@ def reduction(g: nx.Graph, scale: int, *, start: XY | None = None, robots: int =
         meta["note"] = "t_g and the bound are those of the point footprint (the paper's model) only"
     return check_instance(Instance(
         name or f"hampath-v{n}-s{scale}" + (f"-r{robots}" if robots > 1 else ""), ms,
-        _grid(width, height, base | tiles_only), tuple(placed), goal=_grid(width, height, base | goal_only),
+        tiles_grid(width, height, base | tiles_only), tuple(placed), goal=tiles_grid(width, height, base | goal_only),
         meta=meta))
 
 
@@ -168,7 +168,8 @@ class Layout:
         return {(cx, y) for y in range(row, cy - HALF)}
 
 
-def _grid(width: int, height: int, cells) -> Grid:
+def tiles_grid(width: int, height: int, cells) -> Grid:
+    """A grid with tiles on ``cells`` and no obstacles."""
     tiles = np.zeros(width * height, dtype=bool)
     for x, y in cells:
         tiles[y * width + x] = True
