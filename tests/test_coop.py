@@ -13,7 +13,7 @@ from bille.instances.generators.coop import LARGE, NO_SPLIT, approaches, attache
 from bille.instances.generators.graphs import grid_graph, hamiltonian_path, random_grid_graph
 from bille.instances.generators.hampath import bound, search_optimum
 from bille.instances.moveset import Kind
-from bille.instances.rules import State, apply
+from bille.instances.rules import State, run
 from bille.solvers import Schedule, solve, validate
 from bille.solvers.schedule import bind
 
@@ -22,13 +22,13 @@ def _manipulations(inst, schedule) -> list[tuple[int, int, str, int]]:
     """(step, robot, "pick" | "place", target cell) of every manipulation, in order."""
     ids = bind(inst, schedule)
     state, out = inst.start_state, []
-    for t in range(ids.shape[1]):
+    for t, nxt in enumerate(run(inst.world, state, ids)):
+        assert isinstance(nxt, State)
         for i, g in enumerate(inst.world.graphs):
             kind = g.kind[ids[i, t]]
             if kind in (Kind.PICK, Kind.PLACE):
                 out.append((t, i, "pick" if kind == Kind.PICK else "place", int(g.target[state.poses[i], ids[i, t]])))
-        state = apply(inst.world, state, list(ids[:, t]))
-        assert isinstance(state, State)
+        state = nxt
     return out
 
 

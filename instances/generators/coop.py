@@ -133,6 +133,11 @@ def attached(g: nx.Graph, scale: int, *, start: XY | None = None, end: XY | None
     + the steps of :func:`demonstration`. ``end`` must have no vertex above it: its upper arm
     leads to the gadget. Raises :class:`InstanceError` for bad graphs, scales, vertices, gaps.
     """
+    return _attached(g, scale, start, end, gap, name)[0]
+
+
+def _attached(g: nx.Graph, scale: int, start: XY | None, end: XY | None, gap: int,
+              name: str | None) -> tuple[Instance, _Parts]:
     check_graph(g, scale)
     for what, v in (("start", start), ("end", end)):
         if v is not None and tuple(v) not in g:
@@ -156,7 +161,7 @@ def attached(g: nx.Graph, scale: int, *, start: XY | None = None, end: XY | None
     return check_instance(Instance(
         name or f"coop-v{n}-s{scale}", load_moveset("point"),
         tiles_grid(w, h, base | parts.tiles_only | parts.gadget.tiles_only), robots,
-        goal=tiles_grid(w, h, base | parts.goal_only | parts.gadget.goal_only), meta=meta))
+        goal=tiles_grid(w, h, base | parts.goal_only | parts.gadget.goal_only), meta=meta)), parts
 
 
 class _Parts:
@@ -194,9 +199,7 @@ def approaches(g: nx.Graph, scale: int, *, start: XY | None = None, end: XY | No
     """The two robots' ways to the gadget of :func:`attached`, each alone: robot 1's copy of
     ``g`` and robot 2's string, each with its line of tiles to its entry as the robot's goal
     cell. Their optimal makespans are the robots' earliest arrivals at the gadget."""
-    inst = attached(g, scale, start=start, end=end, gap=gap)
-    end = tuple(inst.meta["end_vertex"])
-    parts = _Parts(g, scale, end, gap)
+    inst, parts = _attached(g, scale, start, end, gap, None)
     w, h = parts.width, parts.height
     out = []
     for k, (layout, way) in enumerate(((parts.first, parts.ways[0]), (parts.second, parts.ways[1]))):
