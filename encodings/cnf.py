@@ -13,6 +13,9 @@ from .model import Model
 
 SAT, UNSAT, UNKNOWN = "sat", "unsat", "unknown"
 BUDGET = 2_000  # conflicts per call between clock checks
+# python-sat's incremental solvers that take assumptions and conflict budgets
+SOLVERS = ("cadical195", "cadical153", "cadical103", "glucose42", "glucose4", "glucose3", "gluecard4",
+           "gluecard3", "maplechrono", "maplecm", "maplesat", "mergesat3", "minicard", "minisat22")
 
 
 class SatBackend:

@@ -39,7 +39,7 @@ import numpy as np
 from bille.instances import Instance
 from bille.instances.grid import HEADING_VECTORS, components, is_connected
 from bille.instances.moveset import Kind
-from bille.solvers.bounds import INF, Relaxed
+from bille.instances.distances import INF, Relaxed
 
 CONNECTIVITY = ("eager", "lazy")
 

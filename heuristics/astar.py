@@ -15,7 +15,7 @@ import time
 
 from bille.instances import Instance, OptionError
 
-from .joint import OBJECTIVE, JointProblem, makespan_bound, to_result, unwind
+from .joint import NO_WALK, OBJECTIVE, JointProblem, to_result, unwind
 
 
 def plan(instance: Instance, *, epsilon: float = 1.0, time_limit: float | None = None,
@@ -26,18 +26,21 @@ def plan(instance: Instance, *, epsilon: float = 1.0, time_limit: float | None =
     ----------
     epsilon : weight of the heuristic (>= 1); 1 gives optimal plans.
     time_limit : seconds before giving up with status ``timeout``.
-    max_expansions : expansions before giving up with status ``timeout``.
+    max_expansions : expansions before giving up with status ``unsolved``.
+
+    A search that runs out of walking states says ``unsolved``, not ``infeasible``: a schedule
+    that picks and places tiles (to make room, and back) is outside its search space.
     """
     if epsilon < 1:
         raise OptionError(f"astar: epsilon must be >= 1, got {epsilon}")
     start_time = time.perf_counter()
     deadline = None if time_limit is None else start_time + time_limit
     problem = JointProblem.of(instance)
-    bound = makespan_bound(problem)
     stats = {"objective": OBJECTIVE, "epsilon": epsilon, "expanded": 0, "generated": 0}
     if problem.unreachable():
         stats["unreachable"] = problem.unreachable()
-        return to_result(instance, "astar", "infeasible", None, lower_bound=None, stats=stats)
+        stats["failure"] = "unreachable"
+        return to_result(instance, "astar", "unsolved", None, stats=stats)
 
     m = instance.num_robots
     root = (problem.start, (0,) * m)
@@ -57,10 +60,14 @@ def plan(instance: Instance, *, epsilon: float = 1.0, time_limit: float | None =
         if problem.is_goal(poses):
             stats["sum_of_costs"] = g_soc
             status = "optimal" if epsilon == 1 else "feasible"
-            return to_result(instance, "astar", status, unwind(parent, key), lower_bound=bound, stats=stats)
+            return to_result(instance, "astar", status, unwind(parent, key), stats=stats)
         stats["expanded"] += 1
-        if stats["expanded"] > max_expansions or (deadline is not None and time.perf_counter() > deadline):
-            return to_result(instance, "astar", "timeout", None, lower_bound=bound, stats=stats)
+        if stats["expanded"] > max_expansions:
+            stats["failure"] = "expansion cap"
+            return to_result(instance, "astar", "unsolved", None, stats=stats)
+        if deadline is not None and time.perf_counter() > deadline:
+            stats["failure"] = "time limit"
+            return to_result(instance, "astar", "timeout", None, stats=stats)
         options = [problem.moves(i, p) for i, p in enumerate(poses)]
         for actions, nxt in problem.joint_moves(poses, options):
             cost, new_debts = problem.transition(poses, debts, nxt)
@@ -73,4 +80,5 @@ def plan(instance: Instance, *, epsilon: float = 1.0, time_limit: float | None =
             h = problem.h(nxt)
             stats["generated"] += 1
             heapq.heappush(frontier, (g[0] + epsilon * h[0], g[1] + h[1], next(counter), child))
-    return to_result(instance, "astar", "infeasible", None, lower_bound=None, stats=stats)
+    stats["failure"] = NO_WALK
+    return to_result(instance, "astar", "unsolved", None, stats=stats)

@@ -124,6 +124,9 @@ class JointProblem:
         return total, tuple(new)
 
 
+NO_WALK = "no walking schedule on the fixed structure (a schedule that moves tiles may exist)"
+
+
 def require_path_planning(instance: Instance) -> None:
     """The walking planners plan on a structure that does not change."""
     if instance.is_reconfiguration:
@@ -140,21 +143,16 @@ def schedule_ids(instance: Instance, steps: list[tuple[int, ...]]) -> np.ndarray
     return np.array(steps, dtype=np.int64).T.reshape(m, len(steps))
 
 
-def to_result(instance: Instance, method: str, status: str, steps: list | None, *, lower_bound: int | None,
-              stats: dict):
-    """A :class:`~bille.solvers.result.Result` from a list of joint actions (or None)."""
+def to_result(instance: Instance, method: str, status: str, steps: list | None, *, stats: dict):
+    """A :class:`~bille.solvers.result.Result` from a list of joint actions (or None). The
+    planners prove no lower bound: ``solve()`` adds the static one."""
     from bille.solvers.result import Result
     from bille.solvers.schedule import Schedule
 
     schedule = None
     if steps is not None:
         schedule = Schedule.from_ids(instance, schedule_ids(instance, steps), meta={"method": method})
-    return Result(method, status, schedule, lower_bound=lower_bound, stats=stats)
-
-
-def makespan_bound(problem: JointProblem) -> int:
-    """No schedule is shorter than the farthest robot's distance to its goal."""
-    return problem.h(problem.start)[1]
+    return Result(method, status, schedule, stats=stats)
 
 
 def unwind(parent: dict, key) -> list:

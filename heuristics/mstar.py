@@ -28,7 +28,7 @@ import time
 
 from bille.instances import Instance, OptionError
 
-from .joint import OBJECTIVE, JointProblem, makespan_bound, to_result, unwind
+from .joint import NO_WALK, OBJECTIVE, JointProblem, to_result, unwind
 
 INF = (1 << 60, 0)
 
@@ -44,7 +44,7 @@ def plan(instance: Instance, *, epsilon: float = 1.0, od: bool = True, time_limi
     epsilon : inflation of the heuristic (>= 1); 1 gives optimal plans.
     od : expand coupled robots one at a time (operator decomposition).
     time_limit : seconds before giving up with status ``timeout``.
-    max_expansions : expansions (of vertices and intermediate nodes) before ``timeout``.
+    max_expansions : expansions (of vertices and intermediate nodes) before ``unsolved``.
     load_transfer, d_tr, max_steps : reconfiguration only (see :func:`.reconfigure.plan`).
     """
     if epsilon < 1:
@@ -119,13 +119,12 @@ class _MStar:
 
     def run(self):
         problem, stats, instance = self.problem, self.stats, self.instance
-        bound = makespan_bound(problem)
         if problem.unreachable():
             stats["unreachable"] = problem.unreachable()
-            return to_result(instance, "mstar", "infeasible", None, lower_bound=None, stats=stats)
+            stats["failure"] = "unreachable"
+            return to_result(instance, "mstar", "unsolved", None, stats=stats)
         status, steps = self.search()
-        lower = None if status == "infeasible" else bound
-        return to_result(instance, "mstar", status, steps, lower_bound=lower, stats=stats)
+        return to_result(instance, "mstar", status, steps, stats=stats)
 
     def search(self) -> tuple[str, list | None]:
         problem, stats = self.problem, self.stats
@@ -145,10 +144,15 @@ class _MStar:
                 stats["sum_of_costs"] = self.g[node][0]
                 return ("optimal" if self.epsilon == 1 else "feasible"), unwind(self.parent, node)
             stats["expanded"] += 1
-            if stats["expanded"] > self.max_expansions or (self.deadline is not None and time.perf_counter() > self.deadline):
+            if stats["expanded"] > self.max_expansions:
+                stats["failure"] = "expansion cap"
+                return "unsolved", None
+            if self.deadline is not None and time.perf_counter() > self.deadline:
+                stats["failure"] = "time limit"
                 return "timeout", None
             self.expand(node)
-        return "infeasible", None
+        stats["failure"] = NO_WALK
+        return "unsolved", None
 
     def expand(self, key):
         problem = self.problem

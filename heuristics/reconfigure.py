@@ -31,9 +31,10 @@ or ``place c`` (carry the tile to a pose facing ``c``, place it). Every step:
 6. The joint action goes through the canonical rules (:func:`~bille.instances.rules.apply`).
 
 The run ends when every job is done, no robot carries a tile and every robot with a goal cell
-stands on it. It stops with status ``timeout`` (reason in ``stats["failure"]``) at the step
-bound, at the time limit, or when the robots are going round in circles after spending the
-budget of priority shifts; like Temporal A*, this loop is not complete.
+stands on it. It gives up with status ``unsolved`` (reason in ``stats["failure"]``) when no
+sequence is found, at the step bound, when the motion planner finds no joint plan, or when the
+robots are going round in circles after spending the budget of priority shifts; it stops with
+``timeout`` at the time limit. Like Temporal A*, this loop is not complete.
 """
 from __future__ import annotations
 
@@ -47,7 +48,7 @@ from bille.instances.moveset import Kind
 from bille.instances.rules import State, apply
 
 from .joint import JointProblem, to_result
-from .sequence import Job, apply_move, sequence_of
+from .sequence import Job, NoSequence, apply_move, sequence_of
 from .spacetime import window
 from .temporal_astar import _shift_up, _timing
 from .walking import UNREACHABLE, Walk, walk_for
@@ -129,9 +130,13 @@ def plan(instance: Instance, *, motion: str = "temporal-astar", load_transfer: b
     per job, at least 200); ``max_shifts``: priority shifts allowed when going round in circles
     (default ``4 m^2 + 4 jobs``).
     """
-    return Loop(instance, motion=motion, load_transfer=load_transfer, d_tr=d_tr, epsilon=epsilon, horizon=horizon,
-                time_limit=time_limit, max_steps=max_steps, max_shifts=max_shifts,
-                priorities=priorities).run(method or motion)
+    try:
+        loop = Loop(instance, motion=motion, load_transfer=load_transfer, d_tr=d_tr, epsilon=epsilon,
+                    horizon=horizon, time_limit=time_limit, max_steps=max_steps, max_shifts=max_shifts,
+                    priorities=priorities)
+    except NoSequence as exc:  # the loop gives up before its first step
+        return to_result(instance, method or motion, "unsolved", None, stats={"failure": str(exc)})
+    return loop.run(method or motion)
 
 
 class Loop:
@@ -613,22 +618,19 @@ class Loop:
         return seen
 
     def run(self, method: str):
-        from bille.solvers.bounds import lower_bound
-
-        bound = lower_bound(self.instance).lower
         seen: set = set()
         step_times: list[float] = []
 
-        def stop(reason: str, status: str = "timeout"):
+        def stop(reason: str, status: str = "unsolved"):
             self.stats["failure"] = reason
             _timing(self.stats, step_times)
-            return to_result(self.instance, method, status, None, lower_bound=bound, stats=self.stats)
+            return to_result(self.instance, method, status, None, stats=self.stats)
 
         while not self.done():
             if len(self.steps) >= self.max_steps:
                 return stop("step bound")
             if self.deadline is not None and time.perf_counter() > self.deadline:
-                return stop("time limit")
+                return stop("time limit", status="timeout")
             t0 = time.perf_counter()
             self.allocate()
             if self.load_transfer:
@@ -653,7 +655,8 @@ class Loop:
             if self.motion == "mstar":
                 joint = self._mstar(fixed, goals)
                 if joint is None:
-                    return stop(f"M* found no joint plan ({self.stats.get('mstar_status')})")
+                    why = self.stats.get("mstar_status")
+                    return stop(f"M* found no joint plan ({why})", status="timeout" if why == "timeout" else "unsolved")
             else:
                 joint, blocked = self._temporal(fixed, goals, intents)
                 for _ in range(len(self.Q)):  # a blocked robot moves up in Q (the paper's rule)
@@ -682,7 +685,7 @@ class Loop:
             self.stats["steps"] = len(self.steps)
         _timing(self.stats, step_times)
         self.stats["final_priorities"] = list(self.Q)
-        return to_result(self.instance, method, "feasible", self.steps, lower_bound=bound, stats=self.stats)
+        return to_result(self.instance, method, "feasible", self.steps, stats=self.stats)
 
 
 

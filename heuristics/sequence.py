@@ -52,7 +52,12 @@ class Job:
 
 
 class SequenceError(InstanceError):
-    """A reconfiguration sequence that cannot be executed (names the job)."""
+    """A given reconfiguration sequence that cannot be executed (names the job): bad input."""
+
+
+class NoSequence(Exception):
+    """The derivation found no sequence within its search: the method gives up (status
+    ``unsolved``); not a proof that none exists, and not bad input."""
 
 
 def sequence_of(instance: Instance) -> list[Job]:
@@ -115,7 +120,7 @@ def check(instance: Instance, jobs: list[Job], *, given: bool = False) -> None:
 
 
 def derive(instance: Instance, *, budget: int = 200) -> list[Job]:
-    """A valid sequence for ``instance`` (see the module docstring), or :class:`SequenceError`."""
+    """A valid sequence for ``instance`` (see the module docstring), or :class:`NoSequence`."""
     w, h = instance.width, instance.height
     start, goal = instance.start.tiles, instance.goal_tiles
     jobs = _deliveries(instance, start & goal, goal & ~start)
@@ -127,9 +132,9 @@ def derive(instance: Instance, *, budget: int = 200) -> list[Job]:
     graph = instance.world.graphs[0]
     order = _order(tiles, empty, fill, graph, w, h, budget)
     if order is None:
-        raise SequenceError(f"{instance.name}: no order of the tile moves found that keeps the structure connected "
-                            f"and lets a robot reach every pick and place ({budget} dead ends searched); "
-                            "give the instance a task list")
+        raise NoSequence(f"no order of the tile moves found that keeps the structure connected "
+                         f"and lets a robot reach every pick and place ({budget} dead ends searched); "
+                         "a task list given with the instance is used as it is")
     jobs += [Job(p, q) for p, q in order]
     check(instance, jobs)
     return jobs
@@ -226,4 +231,4 @@ def _order(tiles: np.ndarray, empty: list[int], fill: list[int], graph, w: int, 
     return go(tiles.copy(), list(empty), list(fill))
 
 
-__all__ = ["Job", "SequenceError", "apply_move", "check", "derive", "sequence_of"]
+__all__ = ["Job", "NoSequence", "SequenceError", "apply_move", "check", "derive", "sequence_of"]

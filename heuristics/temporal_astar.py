@@ -13,8 +13,9 @@ Deadlocks. If a robot finds no walk at all (not even waiting), it moves up one p
 the step is planned again. If the robots come back to a joint state they were in before with
 the same ``Q``, they are going round in circles: the lowest-priority robot not at its goal moves
 up one place. Both count against a budget of priority shifts; when it is spent, or the step
-bound or time limit is reached, the planner stops with status ``timeout`` and the reason in
-``stats["failure"]``. Temporal A* is not complete: a stop is not a proof that no schedule exists.
+bound is reached, the planner gives up with status ``unsolved`` and the reason in
+``stats["failure"]`` (``timeout`` when the time limit ended it). Temporal A* is not complete:
+giving up is not a proof that no schedule exists.
 """
 from __future__ import annotations
 
@@ -25,7 +26,7 @@ import numpy as np
 from bille.instances import Instance, OptionError
 from bille.instances.rules import State, apply
 
-from .joint import JointProblem, makespan_bound, to_result
+from .joint import JointProblem, to_result
 from .spacetime import window
 
 
@@ -66,12 +67,12 @@ def plan(instance: Instance, *, epsilon: float = 1.0, horizon: int = 5, time_lim
     start_time = time.perf_counter()
     deadline = None if time_limit is None else start_time + time_limit
     problem = JointProblem.of(instance)
-    bound = makespan_bound(problem)
     stats = {"horizon": horizon, "epsilon": epsilon, "steps": 0, "priority_shifts": 0, "replans": 0,
              "expanded": 0, "plan_ms_mean": 0.0, "plan_ms_max": 0.0}
     if problem.unreachable():
         stats["unreachable"] = problem.unreachable()
-        return to_result(instance, "temporal-astar", "infeasible", None, lower_bound=None, stats=stats)
+        stats["failure"] = "unreachable"
+        return to_result(instance, "temporal-astar", "unsolved", None, stats=stats)
     total = sum(int(d[p]) for d, p in zip(problem.dists, problem.start))
     max_steps = max(100, 4 * total) if max_steps is None else max_steps
     max_shifts = 4 * m * m if max_shifts is None else max_shifts
@@ -86,7 +87,8 @@ def plan(instance: Instance, *, epsilon: float = 1.0, horizon: int = 5, time_lim
     def stop(reason: str):
         stats["failure"] = reason
         _timing(stats, step_times)
-        return to_result(instance, "temporal-astar", "timeout", None, lower_bound=bound, stats=stats)
+        status = "timeout" if reason == "time limit" else "unsolved"
+        return to_result(instance, "temporal-astar", status, None, stats=stats)
 
     while not problem.is_goal(state.poses):
         if len(steps) >= max_steps:
@@ -118,13 +120,13 @@ def plan(instance: Instance, *, epsilon: float = 1.0, horizon: int = 5, time_lim
         nxt = apply(instance.world, state, first, step=len(steps) + 1)
         if not isinstance(nxt, State):  # cannot happen if the windows respect the reservations
             stats["failure"] = f"internal: {nxt}"
-            return to_result(instance, "temporal-astar", "error", None, lower_bound=bound, stats=stats)
+            return to_result(instance, "temporal-astar", "error", None, stats=stats)
         steps.append(tuple(first))
         state = nxt
         stats["steps"] = len(steps)
     _timing(stats, step_times)
     stats["final_priorities"] = list(Q)
-    return to_result(instance, "temporal-astar", "feasible", steps, lower_bound=bound, stats=stats)
+    return to_result(instance, "temporal-astar", "feasible", steps, stats=stats)
 
 
 def _plan_step(problem: JointProblem, poses, Q: list[int], H: int, epsilon: float, dists, feet, stats):

@@ -5,12 +5,14 @@ the command line and the parametrized tests read it.
 """
 from __future__ import annotations
 
-import inspect
-import time
+import inspect as _inspect
+import time as _time
 
 from bille.instances import Instance, OptionError
 
+from .bounds import Bounds, lower_bound
 from .metrics import Metrics, metrics
+from .options import check_options
 from .registry import METHODS
 from .result import STATUSES, Result
 from .schedule import Schedule, bind, dump_schedule, load_schedule, save_schedule, schedule_from_text
@@ -20,8 +22,12 @@ from .validate import Report, validate
 def solve(instance: Instance, method: str, **options) -> Result:
     """Solve ``instance`` with ``method`` (a key of :data:`METHODS`).
 
-    The returned schedule is validated here: a schedule that breaks a rule turns the result into
-    status ``error`` (with the violation in ``stats``) instead of reaching the user.
+    Options are checked by type and range first (:mod:`.options`). The static lower bound
+    (:mod:`.bounds`) is computed once, here, and handed to the methods that search from it. The
+    returned schedule is validated here: a schedule that breaks a rule turns the result into
+    status ``error`` (with the violation in ``stats``) instead of reaching the user. So does a
+    contradiction between proofs: a lower bound above the makespan found, a schedule where a
+    static argument proved that none exists, or ``optimal`` makespan without a matching proof.
 
     >>> from bille.instances import instance_from_text
     >>> inst = instance_from_text("grid: |\\n  TTT\\nmoveset: point\\nrobots: [{at: [0, 0]}]\\nrobot_goals: [[2, 0]]")
@@ -31,24 +37,48 @@ def solve(instance: Instance, method: str, **options) -> Result:
     if method not in METHODS:
         raise OptionError(f"unknown method '{method}' (expected one of: {', '.join(METHODS)})")
     plan = METHODS[method]
-    accepted = inspect.signature(plan).parameters
-    for name in options:
-        if name not in accepted:
-            known = ", ".join(p for p in accepted if p != "instance")
-            raise OptionError(f"{method}: unknown option '{name}' (expected one of: {known})")
-    start = time.perf_counter()
+    options = check_options(method, plan, options, internal=("bounds",))
+    start = _time.perf_counter()
+    bounds = lower_bound(instance)
+    if "bounds" in _inspect.signature(plan).parameters:
+        options["bounds"] = bounds
     result = plan(instance, **options)
-    elapsed = time.perf_counter() - start
+    elapsed = _time.perf_counter() - start
     fields = dict(method=method, status=result.status, schedule=result.schedule, metrics=result.metrics,
-                  lower_bound=result.lower_bound, time_s=elapsed, stats=dict(result.stats))
+                  lower_bound=_lower(result, bounds), time_s=elapsed, stats=dict(result.stats))
+    fields["stats"].setdefault("bound_parts", bounds.parts)
     if result.schedule is not None:
         report = validate(instance, result.schedule)
         if report.valid:
             fields["metrics"] = report.metrics
+            _contradiction(fields, result, bounds)
         else:
             fields.update(status="error", metrics=None)
             fields["stats"]["violation"] = str(report.violation)
     return Result(**fields)
+
+
+def _lower(result: Result, bounds: Bounds) -> int | None:
+    """The best lower bound known: the static one, or the method's proof if higher. None for a
+    proof that no schedule exists."""
+    if result.status == "infeasible":
+        return None
+    return max(bounds.lower, result.lower_bound or 0)
+
+
+def _contradiction(fields: dict, result: Result, bounds: Bounds) -> None:
+    """Turn a result whose proofs contradict its valid schedule into status ``error``."""
+    makespan, lower, stats = fields["metrics"].makespan, fields["lower_bound"], fields["stats"]
+    why = None
+    if bounds.impossible:
+        why = f"a valid schedule of makespan {makespan}, but no schedule should exist: {'; '.join(bounds.impossible)}"
+    elif lower is not None and lower > makespan:
+        why = f"lower bound {lower} above the makespan {makespan} of a valid schedule"
+    elif result.status == "optimal" and "objective" not in stats and result.lower_bound != makespan:
+        why = f"optimal makespan {makespan} claimed with a proof of {result.lower_bound}"
+    if why is not None:
+        fields["status"] = "error"
+        stats["contradiction"] = why
 
 
 __all__ = [

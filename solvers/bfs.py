@@ -50,9 +50,12 @@ def plan(instance: Instance, *, time_limit: float | None = None, max_steps: int 
     Parameters
     ----------
     time_limit : seconds before giving up (status ``timeout``), None for no limit.
-    max_steps : horizon cap; without a goal within it the status is ``timeout`` with lower bound
+    max_steps : horizon cap; without a goal within it the status is ``unsolved`` with lower bound
         ``max_steps + 1``. ``infeasible`` means the whole reachable state space was exhausted.
-    max_states : stop (status ``timeout``) after storing this many states.
+    max_states : give up (status ``unsolved``) after storing this many states.
+
+    Whenever it stops, every state within the depth reached has been checked, so the lower bound
+    it reports (that depth + 1) is proved.
     """
     if max_steps < 0 or max_states < 1:
         raise OptionError("bfs: max_steps must be >= 0 and max_states >= 1")
@@ -65,8 +68,9 @@ def plan(instance: Instance, *, time_limit: float | None = None, max_steps: int 
     frontier = [root]
     depth, expanded, truncated = 0, 0, False
 
-    def stats():
-        return {"expanded": expanded, "states": len(parent), "depth": depth}
+    def stats(failure=None):
+        out = {"expanded": expanded, "states": len(parent), "depth": depth}
+        return out if failure is None else {**out, "failure": failure}
 
     while frontier:
         for s in frontier:
@@ -79,9 +83,11 @@ def plan(instance: Instance, *, time_limit: float | None = None, max_steps: int 
             break
         nxt = []
         for s in frontier:
-            if deadline is not None and time.perf_counter() > deadline or len(parent) > max_states:
+            out_of_time = deadline is not None and time.perf_counter() > deadline
+            if out_of_time or len(parent) > max_states:
                 # every state within `depth` steps has been checked: the optimum is larger
-                return Result("bfs", "timeout", lower_bound=depth + 1, stats=stats(),
+                return Result("bfs", "timeout" if out_of_time else "unsolved", lower_bound=depth + 1,
+                              stats=stats("time limit" if out_of_time else "state cap"),
                               time_s=time.perf_counter() - start)
             expanded += 1
             options = [candidate_actions(instance, s, i) for i in range(instance.num_robots)]
@@ -95,7 +101,8 @@ def plan(instance: Instance, *, time_limit: float | None = None, max_steps: int 
         frontier = nxt
         depth += 1
     if truncated:  # no goal within max_steps
-        return Result("bfs", "timeout", lower_bound=max_steps + 1, stats=stats(), time_s=time.perf_counter() - start)
+        return Result("bfs", "unsolved", lower_bound=max_steps + 1, stats=stats("step bound"),
+                      time_s=time.perf_counter() - start)
     return Result("bfs", "infeasible", stats=stats(), time_s=time.perf_counter() - start)
 
 

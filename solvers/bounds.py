@@ -1,76 +1,74 @@
-"""Lower bounds on the makespan, and what no schedule can do.
+"""Lower bounds on the makespan, and static proofs that no schedule exists.
 
-Distances here are taken in the *relaxed* pose graph: a robot may walk anywhere that is not an
-obstacle, as if every cell held a tile. Tiles can appear and vanish during a reconfiguration, so
-only these distances bound every schedule; on a fixed structure they may be shorter than the
-walking distances the planners use.
+Every part is a theorem about *every* valid schedule of the instance, under the full rules:
+several robots, tiles that are picked and placed again (a tile that stays may leave its cell and
+come back, another tile may take its place), relays and hand-overs (a tile set down by one robot
+and picked up by another), tiles carried at the start. Distances are those of the relaxed pose
+graph (:mod:`bille.instances.distances`): no schedule walks between two poses faster. The parts:
 
-- Each robot needs at least its distance to its goal cell.
-- Every tile that must move needs a pick and a place (a biped also a step in between: its
-  target is the cell ahead of its front foot), spread over at most ``m`` robots per step; the
-  first such move needs some robot to reach a pick pose, pick, reach a place pose and place.
+``robot goals``
+    A robot with a goal cell must stand on it after the last step, so the makespan is at least its
+    relaxed distance from its start to a pose with the front foot there.
+``manipulations``
+    Let ``R`` be the cells that hold a tile at the start and not in the goal (``k = |R|``), ``F``
+    those that hold one in the goal and not at the start, and ``c`` the robots carrying at the
+    start; tiles are conserved, so ``|F| = k + c``. Only a pick empties a cell and only a place
+    fills one, so every cell of ``R`` is picked at least once and every cell of ``F`` placed at
+    least once: at least ``k`` picks and ``k + c`` places. If every robot picks and places on one
+    and the same cell from a pose (Bill-E: the cell ahead of its front foot), at least ``k`` more
+    motions: the last pick at a cell of ``R`` takes a tile that its robot must set down (no robot
+    carries at the end) somewhere else (were it set down on the same cell, that cell would end
+    with a tile), which needs the robot to have moved in between; these picks are distinct, and
+    so are their carries. A robot takes one action per step, so ``m`` robots need at least
+    ``ceil(actions / m)`` steps.
+``first place on every cell to fill``
+    Take the last place on a cell ``v`` of ``F`` and the robot that makes it, standing at a pose
+    ``p`` facing ``v``. It carries a tile; either it has carried one since the start (then the
+    step is at least ``dist(start, p) + 1``), or its last pick before happened at some pose
+    ``q``, at a step at least ``dist(start, q) + 1``, and then the place comes at least
+    ``dist(q, p) + 1`` steps later. The minimum over robots and poses of these bounds that step,
+    and so the makespan, for every ``v`` of ``F``: the bound is the maximum over ``F``. A pick
+    from *any* cell counts (a tile that stays may be the one carried, and another tile refill
+    its cell), which is what makes the bound hold for relays.
+``last pick from every cell to empty``
+    The last pick at a cell ``u`` of ``R`` happens at a pose ``q`` facing ``u``, at a step at
+    least ``dist(start, q) + 1``; its tile is set down later, at least one step later, and at
+    least two if the robot picks and places ahead of itself (it must move first; see above).
+``carrying (matching)``
+    A carry segment (pick at ``u``, place at ``v``, one robot) walks at least the relaxed distance
+    from a pose picking at ``u`` to one placing at ``v``. Chaining segments through intermediate
+    cells (relays, tiles set aside) gives the shortest-path closure ``d*(u, v)``. The multiset of
+    all segments of a schedule is a flow in which every cell of ``R`` sends one unit more than it
+    receives and every cell of ``F`` receives one more than it sends (the tiles carried at the
+    start add sources of their own). Decomposing it into paths, the paths leaving ``R`` end at
+    distinct cells of ``F``, so the walking while carrying is at least a minimum-cost assignment
+    of ``R`` to distinct cells of ``F`` under ``d*``. Those motions, the ``k`` picks and the
+    ``k + c`` places are different actions: ``ceil((assignment + 2k + c) / m)`` steps.
+
+Static infeasibility (``impossible``): a robot whose goal cell is unreachable; a cell of ``F``
+that no robot can ever place on (the bound above is infinite); a cell of ``R`` that no robot
+can ever pick at; cells of ``R`` that cannot all be assigned to cells of ``F`` at a finite
+closure distance. Each contradicts a part above, which holds for every schedule.
+
+Checked against the brute-force search (``bille solve -m bfs``) on random tiny instances by
+``tests/test_soundness.py``: no part may exceed a proved optimum.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cached_property
 
 import numpy as np
+from scipy.optimize import linear_sum_assignment
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
 from bille.instances import Instance, PoseGraph
+from bille.instances.distances import INF, Relaxed, facing, manipulates_ahead
 from bille.instances.moveset import Kind
 
-INF = np.iinfo(np.int32).max // 2
-
-
-@dataclass(frozen=True, eq=False)
-class Relaxed:
-    """The pose graph of one robot type with tiles ignored: walking on every non-obstacle cell."""
-
-    graph: PoseGraph
-
-    @cached_property
-    def edges(self) -> csr_matrix:
-        g = self.graph
-        walking = np.isin(g.kind, (Kind.WAIT, Kind.MOTION))
-        p, a = np.nonzero((g.succ >= 0) & walking[None, :])
-        q = g.succ[p, a]
-        keep = p != q
-        n = g.num_poses
-        return csr_matrix((np.ones(int(keep.sum()), np.float32), (p[keep], q[keep])), shape=(n, n))
-
-    def _run(self, sources, reverse: bool) -> np.ndarray:
-        sources = np.asarray(sources, dtype=np.int64)
-        if len(sources) == 0:
-            return np.full(self.graph.num_poses, INF, dtype=np.int64)
-        graph = self.edges.T.tocsr() if reverse else self.edges
-        d = dijkstra(graph, indices=sources, unweighted=True, min_only=True)
-        return np.where(np.isfinite(d), d, INF).astype(np.int64)
-
-    def from_pose(self, pose: int) -> np.ndarray:
-        """Steps from ``pose`` to every pose."""
-        return self._run([pose], reverse=False)
-
-    def to_poses(self, poses) -> np.ndarray:
-        """Steps from every pose to the nearest of ``poses``."""
-        return self._run(poses, reverse=True)
-
-    def to_front(self, cell: int) -> np.ndarray:
-        """Steps from every pose to a pose with the front foot on ``cell``."""
-        g = self.graph
-        return self.to_poses(np.flatnonzero(g.valid & (g.feet[:, 0] == cell)))
-
-
-def facing(graph: PoseGraph, kind: Kind, cells: np.ndarray) -> np.ndarray:
-    """Poses from which an action of ``kind`` targets one of the flat ``cells`` mask."""
-    acts = np.flatnonzero(graph.kind == kind)
-    if len(acts) == 0:
-        return np.zeros(0, dtype=np.int64)
-    t = graph.target[:, acts]
-    hit = (t >= 0) & cells[np.maximum(t, 0)] & (graph.succ[:, acts] >= 0)
-    return np.flatnonzero(hit.any(axis=1))
+# the weight of a pick or place edge in the transport graph: small enough that any number of
+# hops adds less than one step, positive because csgraph reads a stored zero as no edge
+_HOP = 1e-7
 
 
 @dataclass
@@ -89,8 +87,9 @@ def lower_bound(instance: Instance) -> Bounds:
     start, goal = instance.start.tiles, instance.goal_tiles
     remove, fill = start & ~goal, goal & ~start
     relaxed = [Relaxed(g) for g in world.graphs]
-    from_start = [r.from_pose(p) for r, p in zip(relaxed, state.poses)]
-    parts, impossible = {}, []
+    m = max(1, instance.num_robots)
+    parts: dict = {}
+    impossible: list[str] = []
 
     goal_steps = 0
     for i, cell in enumerate(instance.goal_cells):
@@ -99,91 +98,123 @@ def lower_bound(instance: Instance) -> Bounds:
         d = int(relaxed[i].to_front(cell)[state.poses[i]])
         if d >= INF:
             impossible.append(f"robot {i} can never reach its goal cell {world.xy(cell)}")
-        goal_steps = max(goal_steps, d)
+        else:
+            goal_steps = max(goal_steps, d)
     parts["robot goals"] = goal_steps
 
-    k_remove, carried = int(remove.sum()), sum(state.carrying)
-    if k_remove or carried:
-        bipeds_only = all(g.footprint == "biped" for g in world.graphs)
-        actions = 2 * k_remove + carried + (k_remove if bipeds_only else 0)
-        parts["actions for the tiles that move"] = -(-actions // max(1, instance.num_robots))
-        first = INF
-        for i, (r, g) in enumerate(zip(relaxed, world.graphs)):
-            place_poses = facing(g, Kind.PLACE, fill)
-            to_place = r.to_poses(place_poses)
-            if state.carrying[i]:
-                first = min(first, int(to_place[state.poses[i]]) + 1)
-            if k_remove:
-                pick_poses = facing(g, Kind.PICK, remove)
-                if len(pick_poses):
-                    via = from_start[i][pick_poses] + 1 + to_place[pick_poses] + 1
-                    first = min(first, int(via.min()))
-        if first >= INF:
-            impossible.append("no robot can ever pick a tile that must move and place it on a cell that must be filled")
-        parts["first tile moved"] = first if first < INF else None
-        carry = _transport(world, relaxed, remove, fill)
-        if carry is not None:
-            work = carry + 2 * k_remove + carried
-            parts["carrying the tiles (matching)"] = -(-work // max(1, instance.num_robots))
+    k, carried = int(remove.sum()), int(sum(state.carrying))
+    if k or carried:
+        ahead = all(manipulates_ahead(g) for g in world.graphs)
+        actions = 2 * k + carried + (k if ahead else 0)
+        parts["manipulations"] = -(-actions // m)
+        from_start = [r.from_pose(p) for r, p in zip(relaxed, state.poses)]
+        place = _first_places(world, relaxed, from_start, state.carrying, fill)
+        parts["first place on every cell to fill"] = _worst(place, fill, world, impossible,
+                                                            "no robot can ever place a tile on {}")
+        pick = _last_picks(world, relaxed, from_start, remove)
+        parts["last pick from every cell to empty"] = _worst(pick, remove, world, impossible,
+                                                             "no robot can ever pick the tile at {}")
+        carry = _transport(world, remove, fill)
+        if carry is None:
+            impossible.append("the tiles that must go cannot all be carried to cells that must be filled")
+        else:
+            parts["carrying (matching)"] = -(-(carry + 2 * k + carried) // m)
     lower = max([v for v in parts.values() if v is not None] + [0])
     return Bounds(lower, parts, impossible)
 
 
-def _transport(world, relaxed, remove, fill) -> int | None:
-    """Least total walking while carrying the tiles that must move.
+def _worst(earliest: np.ndarray, cells: np.ndarray, world, impossible: list[str], why: str) -> int | None:
+    """The largest of the per-cell bounds ``earliest`` over the cells of the mask; an unreachable
+    cell is a proof of infeasibility (its bound is None then)."""
+    values = earliest[cells]
+    if not len(values):
+        return 0
+    if (values >= INF).any():
+        bad = np.flatnonzero(cells & (earliest >= INF))[0]
+        impossible.append(why.format(world.xy(int(bad))))
+        return None
+    return int(values.max())
 
-    One *hop* carries a tile from cell ``u`` to cell ``v``: at least the distance from a pose
-    that picks at ``u`` to a pose that places at ``v`` (the best robot type). A tile may travel
-    in several hops, handed over between robots (a relay), so the cost of getting a tile from
-    ``u`` to ``v`` is the shortest path over hops (the metric closure). Tiles have no identity,
-    so the tiles from the cells that must empty reach the cells that must fill at no less than a
-    minimum-cost matching under that closure. Tiles carried at the start are left out (they may
-    be placed at once). None if some required pair can never be joined.
+
+def _by_target(graph: PoseGraph, kind: Kind, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Pairs ``(pose, cell)``: from the valid ``pose``, an action of ``kind`` targets ``cell``."""
+    acts = np.flatnonzero(graph.kind == kind)
+    if not len(acts):
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    ok = (graph.target[:, acts] >= 0) & (graph.succ[:, acts] >= 0) & graph.valid[:, None]
+    p, a = np.nonzero(ok)
+    return p.astype(np.int64), graph.target[p, acts[a]].astype(np.int64)
+
+
+def _first_places(world, relaxed, from_start, carrying, fill) -> np.ndarray:
+    """Per cell: the earliest step at which any robot can place a tile there (``INF`` if never),
+    carrying from the start or after a pick anywhere (module docstring)."""
+    n = world.width * world.height
+    best = np.full(n, INF, dtype=np.int64)
+    if not fill.any():
+        return best
+    for i, (g, r) in enumerate(zip(world.graphs, relaxed)):
+        picks, _ = _by_target(g, Kind.PICK, n)
+        offsets = np.full(g.num_poses, INF, dtype=np.int64)
+        picked = np.unique(picks)
+        offsets[picked] = np.where(from_start[i][picked] < INF, from_start[i][picked] + 1, INF)
+        if carrying[i]:
+            offsets = np.minimum(offsets, from_start[i])
+        loaded = r.from_offsets(offsets)  # earliest arrival at each pose with a tile
+        poses, cells = _by_target(g, Kind.PLACE, n)
+        arrive = loaded[poses]
+        ok = arrive < INF
+        np.minimum.at(best, cells[ok], arrive[ok] + 1)
+    return best
+
+
+def _last_picks(world, relaxed, from_start, remove) -> np.ndarray:
+    """Per cell: the earliest step by which a tile picked there can have been set down again."""
+    n = world.width * world.height
+    best = np.full(n, INF, dtype=np.int64)
+    for i, g in enumerate(world.graphs):
+        poses, cells = _by_target(g, Kind.PICK, n)
+        reach = from_start[i][poses]
+        ok = reach < INF
+        down = 2 + (1 if manipulates_ahead(g) else 0)
+        np.minimum.at(best, cells[ok], reach[ok] + down)
+    return best
+
+
+def _transport(world, remove: np.ndarray, fill: np.ndarray) -> int | None:
+    """Least total walking while carrying: a minimum-cost assignment of the cells that must empty
+    to distinct cells that must fill under the closure distance ``d*`` of the module docstring.
+    None if no assignment of finite cost exists.
+
+    ``d*`` is a shortest path in one graph: the relaxed poses of every robot type, plus a node
+    per cell; a cell leads to the poses that pick at it and a pose to the cells it places at,
+    at a weight (``_HOP``) that no number of hops adds up to one step.
     """
-    from scipy.optimize import linear_sum_assignment
-    from scipy.sparse.csgraph import csgraph_from_dense, floyd_warshall
-
     rm, fl = np.flatnonzero(remove), np.flatnonzero(fill)
-    if len(rm) == 0:
+    if not len(rm):
         return 0
     if len(fl) < len(rm):
         return None
-    cells = np.flatnonzero(~world.obstacles)
-    index = {int(c): k for k, c in enumerate(cells)}
-    hop = np.full((len(cells), len(cells)), np.inf)
-    for g, r in zip(world.graphs, relaxed):
-        picks_at = _facing_each(g, Kind.PICK, cells)
-        places_at = _facing_each(g, Kind.PLACE, cells)
-        for v, place_poses in enumerate(places_at):
-            if not len(place_poses):
-                continue
-            to_v = r.to_poses(place_poses)
-            for u, pick_poses in enumerate(picks_at):
-                if len(pick_poses):
-                    d = to_v[pick_poses].min()
-                    if d < INF:
-                        hop[u, v] = min(hop[u, v], d)
-    # from_dense with null_value=inf keeps zero-cost hops (a dense zero would mean "no edge")
-    closure = floyd_warshall(csgraph_from_dense(hop, null_value=np.inf), directed=True)
-    cost = closure[np.ix_([index[int(c)] for c in rm], [index[int(c)] for c in fl])]
+    n = world.width * world.height
+    rows, cols, weights = [], [], []
+    base = n  # cells are nodes 0 .. n-1, then each robot type's poses
+    for g in {id(g): g for g in world.graphs}.values():
+        e = Relaxed(g).edges.tocoo()
+        rows += [e.row + base]
+        cols += [e.col + base]
+        weights += [e.data]
+        p, c = _by_target(g, Kind.PICK, n)
+        rows, cols, weights = rows + [c], cols + [p + base], weights + [np.full(len(p), _HOP)]
+        p, c = _by_target(g, Kind.PLACE, n)
+        rows, cols, weights = rows + [p + base], cols + [c], weights + [np.full(len(p), _HOP)]
+        base += g.num_poses
+    graph = csr_matrix((np.concatenate(weights), (np.concatenate(rows), np.concatenate(cols))), shape=(base, base))
+    d = dijkstra(graph, indices=rm)[:, fl]
+    cost = np.where(np.isfinite(d), np.floor(d + 1e-3), np.inf)
     if not np.isfinite(cost).any(axis=1).all():
         return None
-    cost = np.where(np.isfinite(cost), cost, 1e9)
-    rows, cols = linear_sum_assignment(cost)
-    total = cost[rows, cols].sum()
-    return None if total >= 1e9 else int(total)
-
-
-def _facing_each(graph: PoseGraph, kind: Kind, cells: np.ndarray) -> list[np.ndarray]:
-    """For each cell, the poses from which an action of ``kind`` targets it."""
-    acts = np.flatnonzero(graph.kind == kind)
-    out = [[] for _ in cells]
-    if not len(acts):
-        return [np.zeros(0, np.int64) for _ in cells]
-    where = {int(c): k for k, c in enumerate(cells)}
-    p, a = np.nonzero((graph.target[:, acts] >= 0) & (graph.succ[:, acts] >= 0))
-    for pose, cell in zip(p.tolist(), graph.target[p, acts[a]].tolist()):
-        k = where.get(cell)
-        if k is not None:
-            out[k].append(pose)
-    return [np.array(x, dtype=np.int64) for x in out]
+    big = 1e12
+    cost = np.where(np.isfinite(cost), cost, big)
+    r, c = linear_sum_assignment(cost)
+    total = cost[r, c].sum()
+    return None if total >= big else int(total)

@@ -25,13 +25,13 @@ import time
 
 import numpy as np
 
-from bille.encodings.cnf import SatBackend
+from bille.encodings.cnf import SOLVERS, SatBackend
 from bille.encodings.cpsat import CpSatBackend
 from bille.encodings.model import CONNECTIVITY, Options, OutOfTime, build, connectivity_cuts, decode, tiles_at
 from bille.instances import Instance, OptionError
 from bille.instances.rules import goal_violation
 
-from .bounds import lower_bound
+from .bounds import Bounds, lower_bound
 from .metrics import metrics
 from .result import Result
 from .schedule import Schedule, bind
@@ -47,7 +47,8 @@ def default_cap(lower: int) -> int:
 def plan_cpsat(instance: Instance, *, time_limit: float | None = None, threads: int = 1, seed: int = 0,
                presolve: bool = False,
                max_makespan: int | None = None, connectivity: str = "eager", minimize_travel: bool = True,
-               prune: bool = True, single_carry: bool = False, first_horizon: int | None = None) -> Result:
+               prune: bool = True, single_carry: bool = False, first_horizon: int | None = None,
+               bounds: Bounds | None = None) -> Result:
     """Optimal makespan with OR-Tools CP-SAT.
 
     Parameters
@@ -68,24 +69,28 @@ def plan_cpsat(instance: Instance, *, time_limit: float | None = None, threads: 
     first_horizon : a guess of the optimal makespan: the search starts there, going down while
         schedules are found and up while none is, instead of up from the lower bound (each
         horizon below the optimum costs a proof of infeasibility; one at ``T - 1`` is enough).
+    bounds : the static lower bound, if already computed (``solve()`` passes it).
     """
     if first_horizon is not None and first_horizon < 1:
         raise OptionError(f"cpsat: first_horizon must be at least 1, got {first_horizon}")
     return _Search("cpsat", instance, time_limit, max_makespan, connectivity, minimize_travel, prune,
                    single_carry, threads=threads, seed=seed, presolve=presolve,
-                   first_horizon=first_horizon).run()
+                   first_horizon=first_horizon, bounds=bounds).run()
 
 
 def plan_sat(instance: Instance, *, time_limit: float | None = None, max_makespan: int | None = None,
              connectivity: str = "eager", minimize_travel: bool = True, prune: bool = True,
-             single_carry: bool = False, solver: str = "cadical195", chunk: int = 8) -> Result:
+             single_carry: bool = False, solver: str = "cadical195", chunk: int = 8,
+             bounds: Bounds | None = None) -> Result:
     """Optimal makespan with a SAT solver of python-sat, incremental with assumptions.
 
     Parameters are those of :func:`plan_cpsat`, and: ``solver`` (a python-sat solver name),
     ``chunk`` (how many horizons one model covers before it is rebuilt larger).
     """
+    if solver not in SOLVERS:
+        raise OptionError(f"sat: unknown solver {solver!r} (expected one of: {', '.join(SOLVERS)})")
     return _Search("sat", instance, time_limit, max_makespan, connectivity, minimize_travel, prune,
-                   single_carry, solver=solver, chunk=chunk).run()
+                   single_carry, solver=solver, chunk=chunk, bounds=bounds).run()
 
 
 class _Search:
@@ -104,7 +109,7 @@ class _Search:
                                single_carry=single_carry)
         self.minimize_travel = minimize_travel
         self.incumbent: np.ndarray | None = None
-        self.bounds = lower_bound(instance)
+        self.bounds = kw.pop("bounds", None) or lower_bound(instance)
         self.cap = default_cap(self.bounds.lower) if max_makespan is None else max_makespan
         if self.cap < self.bounds.lower:
             raise OptionError(f"{method}: the horizon cap {self.cap} is below the makespan lower bound "
@@ -281,8 +286,10 @@ class _Search:
         return ids
 
     def _infeasible(self) -> Result:
-        self.stats["reason"] = f"no schedule with a makespan up to the horizon cap {self.cap}"
-        return self.result("infeasible")
+        """No schedule within the horizon cap: not a proof that none exists (a longer one may),
+        so ``unsolved``, with the cap + 1 as the lower bound."""
+        self.stats["failure"] = f"no schedule with a makespan up to the horizon cap {self.cap}"
+        return self.result("unsolved", lower=self.cap + 1)
 
 
 def _parts(parts: dict) -> str:

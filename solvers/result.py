@@ -7,16 +7,20 @@ from typing import Any
 from .metrics import Metrics
 from .schedule import Schedule
 
-STATUSES = ("optimal", "feasible", "infeasible", "timeout", "error")
+STATUSES = ("optimal", "feasible", "infeasible", "timeout", "unsolved", "error")
 
 
 @dataclass(frozen=True)
 class Result:
     """A solver's answer.
 
-    ``status``: ``optimal`` (schedule with proof), ``feasible`` (schedule, no proof),
-    ``infeasible`` (proof that none exists within the method's bounds), ``timeout`` (the limit
-    was hit; a schedule may still be present), ``error`` (the method failed; see ``stats``).
+    ``status`` (DESIGN §5): ``optimal`` (schedule with proof of its objective: the makespan,
+    unless ``stats["objective"]`` names another), ``feasible`` (schedule, no proof),
+    ``infeasible`` (proof that no schedule exists at all), ``timeout`` (the time limit ended the
+    run, no schedule), ``unsolved`` (the method gave up before its time limit, no schedule, never
+    a proof: the reason in ``stats["failure"]``), ``error`` (the method failed, or its proofs
+    contradict its schedule; see ``stats``). ``lower_bound``: the best proved lower bound on the
+    makespan (None with ``infeasible``).
     """
 
     method: str

@@ -3,6 +3,7 @@ import pytest
 
 from bille.instances import OptionError
 from bille.solvers import METHODS, solve, validate
+from bille.solvers.bfs import plan
 from helpers import make
 
 
@@ -40,10 +41,12 @@ def test_a_robot_that_cannot_turn_around_is_proved_infeasible():
     assert result.status == "infeasible" and result.schedule is None
 
 
-def test_limits_give_timeout_with_a_lower_bound():
+def test_limits_give_unsolved_with_a_proved_lower_bound():
     inst = make("TTTTTTTT", [{"at": [0, 0]}], moveset="point", robot_goals=[[7, 0]])
-    result = solve(inst, "bfs", max_steps=3)
-    assert result.status == "timeout" and result.lower_bound == 4 and result.schedule is None
+    result = plan(inst, max_steps=3)  # the search's own proof: nothing within 3 steps
+    assert result.status == "unsolved" and result.lower_bound == 4 and result.schedule is None
+    assert result.stats["failure"] == "step bound"
+    assert solve(inst, "bfs", max_steps=3).lower_bound == 7  # solve() adds the static bound
 
 
 def test_unknown_options_are_rejected():

@@ -64,7 +64,8 @@ def test_cooperation_is_needed_and_found():
 def test_single_carry_leaves_out_the_hand_over(method, optimum):
     # carried once, straight from its start to its goal, the tile could not get past a robot
     inst = TINY["handover"]()
-    assert solve(inst, method, single_carry=True, max_makespan=16).status == "infeasible"
+    capped = solve(inst, method, single_carry=True, max_makespan=16)
+    assert capped.status == "unsolved" and capped.lower_bound == 17
     plain = TINY["point-move-tile"]()
     result = solve(plain, method, single_carry=True)
     assert result.status == "optimal" and result.metrics.makespan == optimum("point-move-tile")
@@ -102,13 +103,15 @@ def test_an_obstacle_wall_is_infeasible(method):
 
 
 @pytest.mark.parametrize("method", ["cpsat", "sat"])
-def test_infeasible_within_the_horizon_cap(method):
+def test_no_schedule_within_the_horizon_cap_is_no_proof(method):
     # an S5 robot on three tiles cannot turn around (breadth-first search proves it); the
-    # encodings prove every horizon up to the cap infeasible
+    # encodings prove every horizon up to the cap infeasible, which bounds the makespan from
+    # below but does not prove that no longer schedule exists
     inst = make("TTT\n...", [{"front": [1, 0], "back": [0, 0]}], moveset="S5", robot_goals=[[0, 0]])
     assert solve(inst, "bfs").status == "infeasible"
     result = solve(inst, method, max_makespan=8, time_limit=120)
-    assert result.status == "infeasible" and "horizon cap 8" in result.stats["reason"]
+    assert result.status == "unsolved" and "horizon cap 8" in result.stats["failure"]
+    assert result.lower_bound == 9 and result.schedule is None
 
 
 @pytest.mark.parametrize("method", ["cpsat", "sat"])
@@ -142,7 +145,7 @@ def test_bad_options_are_rejected(method):
     inst = TINY["point-walk"]()
     with pytest.raises(OptionError, match="below the makespan lower bound"):
         solve(inst, method, max_makespan=1)
-    with pytest.raises(OptionError, match="time limit"):
+    with pytest.raises(OptionError, match="time_limit"):
         solve(inst, method, time_limit=0)
     with pytest.raises(OptionError, match="connectivity"):
         solve(inst, method, connectivity="magic")

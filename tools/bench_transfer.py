@@ -126,7 +126,7 @@ def random_report(runs: int, horizon: int, d_tr: int, time_limit: float, exact_l
     lines of a table, one per size as soon as it is measured."""
     from dataclasses import replace
 
-    from bille.heuristics.sequence import SequenceError, sequence_of
+    from bille.heuristics.sequence import NoSequence, sequence_of
     from bille.instances import Task
     from bille.instances.generators.random import random_reconfiguration
 
@@ -148,7 +148,7 @@ def random_report(runs: int, horizon: int, d_tr: int, time_limit: float, exact_l
                 jobs = sequence_of(inst)
                 inst = replace(inst, tasks=tuple(Task((j.pick % w, j.pick // w), (j.place % w, j.place // w))
                                                  for j in jobs))
-            except SequenceError:  # the same instance with the moves that made its goal
+            except NoSequence:  # the same instance with the moves that made its goal
                 inst = random_reconfiguration(side, side, tiles, robots, moved, seed=seed, tasks=True)
                 given += 1
             results = {}

@@ -165,10 +165,14 @@ def solve_(instance: str, method: str, epsilon, horizon, time_limit, threads, lo
 def plan_sequence(instance: str, as_json: bool) -> int:
     """Print the reconfiguration sequence of INSTANCE: its tasks (checked), or one derived so
     that running it one task at a time keeps the structure connected."""
-    from bille.heuristics.sequence import sequence_of
+    from bille.heuristics.sequence import NoSequence, sequence_of
 
     inst = _instance(instance)
-    jobs = sequence_of(inst)
+    try:
+        jobs = sequence_of(inst)
+    except NoSequence as exc:
+        click.echo(f"{inst.name}: {exc}", err=True)
+        return EXIT_NO
     source = "given" if inst.tasks is not None else "derived"
     xy = inst.world.xy
     rows = [{"pick": None if j.pick is None else list(xy(j.pick)), "place": list(xy(j.place)),
