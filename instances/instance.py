@@ -21,6 +21,7 @@ import yaml
 from .errors import InstanceError, MovesetError
 from .grid import CELL_CHARS, Grid, detached_cells, is_connected
 from .moveset import Moveset, load_moveset
+from .limits import check_size
 from .posegraph import compile_posegraph
 from .rules import State, World
 from .yamlsource import (
@@ -99,7 +100,9 @@ class Instance:
 
     @cached_property
     def world(self) -> World:
-        """The compiled world: one pose graph per distinct moveset, shared by its robots."""
+        """The compiled world: one pose graph per distinct moveset, shared by its robots.
+        Raises :class:`InstanceError` if its tables would not fit in memory (:mod:`.limits`)."""
+        check_size(self.movesets or (self.moveset,), self.width, self.height, f"instance '{self.name}'")
         graphs = {}
         for ms in self.movesets:
             if ms not in graphs:
@@ -141,6 +144,7 @@ def check_instance(inst: Instance, src: Source | None = None) -> Instance:
     """
     src = src or Source(None, InstanceError)
     w, h = inst.width, inst.height
+    check_size(inst.movesets or (inst.moveset,), w, h, src.at(("grid",)).rstrip(": ") or f"instance '{inst.name}'")
     start, goal = inst.start, inst.goal_grid
     if (goal.width, goal.height) != (w, h):
         raise src.fail(("goal",), f"the goal is {goal.width}x{goal.height}, the start grid {w}x{h}")

@@ -62,6 +62,7 @@ def load_yaml_text(text: str, name: str | None, error: type[BilleError]) -> tupl
     """
     src = Source(name, error)
     try:
+        _refuse_aliases(text, src)
         node = yaml.compose(text, Loader=_Loader)
         if node is None:
             raise src.fail((), "the file is empty")
@@ -70,6 +71,16 @@ def load_yaml_text(text: str, name: str | None, error: type[BilleError]) -> tupl
     except yaml.YAMLError as exc:
         raise _yaml_failure(exc, src) from None
     return data, src
+
+
+def _refuse_aliases(text: str, src: Source) -> None:
+    """Our files need no anchors and aliases, and an alias can make a few lines expand to
+    gigabytes (the "billion laughs"): the first alias is refused, by its line, before anything
+    is built."""
+    for event in yaml.parse(text, Loader=_Loader):
+        if isinstance(event, yaml.AliasEvent):
+            raise src.fail((), f"YAML aliases (*{event.anchor}) are not allowed in bille files",
+                           event.start_mark.line + 1)
 
 
 def _yaml_failure(exc: yaml.YAMLError, src: Source) -> BilleError:

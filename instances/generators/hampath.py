@@ -45,6 +45,7 @@ import numpy as np
 from ..errors import InstanceError
 from ..grid import Grid, neighbour_table
 from ..instance import Instance, Robot, check_instance
+from ..limits import check_size
 from ..moveset import Kind, load_moveset
 from ..rules import State, apply
 from .graphs import draw_graph, hamiltonian_path
@@ -103,6 +104,7 @@ def reduction(g: nx.Graph, scale: int, *, start: XY | None = None, robots: int =
     gap = best + 1 if robots > 1 else 0
     top = 2 if robots > 1 else 0                 # the line joining the copies runs along row 0
     width, height = robots * one.width + (robots - 1) * gap, top + one.height
+    check_size([ms], width, height, "gen hampath")
     anchor = min(g.nodes, key=lambda v: (v[1], v[0]))
     base, tiles_only, goal_only, placed = set(), set(), set(), []
     copies = [Layout(g, scale, k * (one.width + gap), top) for k in range(robots)]

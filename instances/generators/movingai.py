@@ -18,6 +18,7 @@ import numpy as np
 from ..errors import InstanceError
 from ..grid import Grid, detached_cells
 from ..instance import Instance, Robot, check_instance
+from ..limits import check_size
 from ..moveset import load_moveset
 
 PASSABLE = set(".GS")
@@ -39,6 +40,7 @@ def read_map(path: str | Path) -> tuple[int, int, np.ndarray]:
         height, width = int(head["height"]), int(head["width"])
     except (KeyError, ValueError):
         raise InstanceError(f"{path}: expected 'height H' and 'width W' lines before 'map'") from None
+    check_size([load_moveset("point")], width, height, str(path))
     rows = lines[k + 1 : k + 1 + height]
     if len(rows) != height:
         raise InstanceError(f"{path}: {len(rows)} map rows, expected height {height}")

@@ -22,6 +22,7 @@ import numpy as np
 from ..errors import InstanceError
 from ..grid import Grid, articulation_points, neighbour_table
 from ..instance import Instance, Robot, Task, check_instance
+from ..limits import check_size
 from ..moveset import load_moveset
 from ..posegraph import compile_posegraph
 
@@ -37,6 +38,7 @@ def random_reconfiguration(width: int, height: int, tiles: int, robots: int, mov
     that do not find room, more moved tiles than can move.
     """
     _positive(width=width, height=height, tiles=tiles)
+    check_size([load_moveset(moveset)], width, height, "gen random")
     if robots < 0 or moved < 0:
         raise InstanceError(f"robots and moved must be at least 0, got {robots} and {moved}")
     if tiles > width * height:
@@ -71,6 +73,7 @@ def crowded(width: int, height: int, robots: int, *, holes: float = 0.1, seed: i
     connected); robot ``i``'s goal cell is robot ``i + 1``'s start front foot (cyclically), so
     every robot must get past others. Every goal is reachable by its robot walking alone."""
     _positive(width=width, height=height, robots=robots)
+    check_size([load_moveset(moveset)], width, height, "gen crowded")
     if not 0 <= holes < 0.5:
         raise InstanceError(f"holes must lie in [0, 0.5), got {holes}")
     if robots < 2:
@@ -113,6 +116,7 @@ def corridor(length: int, robots: int, *, room: int = 3, moved: int = 0, seed: i
     ms = load_moveset(moveset)
     rnd = random.Random(seed)
     width, height = 2 * room + length + 3, room + 2
+    check_size([ms], width, height, "gen corridor")
     left = [(1 + x, 1 + y) for y in range(room) for x in range(room)]
     right = [(1 + room + length + x, 1 + y) for y in range(room) for x in range(room)]
     mid = 1 + room // 2

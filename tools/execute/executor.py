@@ -469,15 +469,10 @@ def run_plan(instance: Instance, plan: np.ndarray, settings: Settings, journal: 
 
 def load_secrets(path: str | Path, robots: list[str]) -> dict[str, bytes]:
     """A secrets file: a JSON or YAML mapping of robot id to its shared secret."""
-    import yaml
+    from bille.instances.yamlsource import load_yaml_file
 
     path = Path(path)
-    try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise ExecutionError(f"--secrets: {path}: cannot read ({exc.strerror})") from None
-    except yaml.YAMLError:
-        raise ExecutionError(f"--secrets: {path}: not YAML or JSON") from None
+    data, _ = load_yaml_file(path, ExecutionError)
     if not isinstance(data, dict):
         raise ExecutionError(f"--secrets: {path}: expected a mapping of robot id to secret")
     missing = [r for r in robots if not isinstance(data.get(r), str) or not data[r]]

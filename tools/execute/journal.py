@@ -87,6 +87,8 @@ def read_events(path: str | Path) -> list[dict]:
     path = Path(path)
     try:
         lines = path.read_text(encoding="utf-8").splitlines()
+    except UnicodeDecodeError as exc:
+        raise ExecutionError(f"{path}: not a bille run journal (not UTF-8 text, byte {exc.start})") from None
     except OSError as exc:
         raise ExecutionError(f"{path}: cannot read the journal ({exc.strerror})") from None
     events = []
