@@ -206,14 +206,28 @@ class Probe:
     def __init__(self, url: str, robot: str, secret: bytes):
         self.robot, self.sealer, self.gate = robot, Sealer(robot, secret), Gate({robot: secret})
         self.reports: list[dict] = []
+        self.nonce = "unknown"  # the robot process's, learnt from its first report
         self.client = connect(parse_url(url), f"probe-{robot}", on_message=self._take)
-        self.client.subscribe(topic("default", robot, "state"), qos=1)
+        self.client.subscribe([(topic("default", robot, "state"), 1), (topic("default", robot, "connection"), 1)])
 
     def _take(self, client, userdata, message):
         _, robot, kind = parse_topic(message.topic)
         msg = self.gate.admit(robot, kind, message.payload)
         if isinstance(msg, dict):
-            self.reports.append(msg)
+            self.nonce = msg["nonce"]
+            if kind == "state":
+                self.reports.append(msg)
+
+    def online(self, other_than: str) -> None:
+        """Wait for the robot's announcement of a process whose nonce is not ``other_than``."""
+        deadline = time.time() + 10
+        while self.nonce in ("unknown", other_than):
+            assert time.time() < deadline, "the robot did not come online"
+            time.sleep(0.05)
+
+    def seal(self, kind: str, body: dict) -> bytes:
+        """A message for the robot, tied to its live process."""
+        return self.sealer.seal(kind, {"nonce": self.nonce, **body})
 
     def publish(self, kind: str, payload: bytes) -> None:
         self.client.publish(topic("default", self.robot, kind), payload, qos=1).wait_for_publish(5)
@@ -222,7 +236,7 @@ class Probe:
         n = len(self.reports)
         deadline = time.time() + 10
         while time.time() < deadline:
-            self.publish("instantActions", self.sealer.seal("instantActions", {"actions": [
+            self.publish("instantActions", self.seal("instantActions", {"actions": [
                 {"actionId": f"q{n}", "actionType": "stateRequest", "parameters": {}}]}))
             for _ in range(40):
                 replies = [r for r in self.reports[n:] if r["replyTo"] == f"q{n}"]
@@ -273,17 +287,18 @@ def test_forged_and_replayed_messages_are_rejected(case, tmp_path, embedded):
         r = single.robots[0]
         init = {"instance": text, "index": 0, "lastStep": 0, "carrying": False, "tiles": tiles,
                 "pose": {"front": list(r.front), "back": list(r.back)}}
-        probe.publish("instantActions", probe.sealer.seal("instantActions", {"actions": [
+        probe.publish("instantActions", probe.seal("instantActions", {"actions": [
             {"actionId": "init", "actionType": "initialize", "parameters": init}]}))
         assert probe.state()["initialized"]
         step = {"sequenceId": 1, "action": sched.actions[0][0], "released": True, "structure": {"picked": [], "placed": []}}
-        order = probe.sealer.seal("order", {"orderId": "o", "orderUpdateId": 1, "steps": [step]})
+        order = probe.seal("order", {"orderId": "o", "orderUpdateId": 1, "steps": [step]})
         probe.publish("order", order)
         probe.publish("order", order)  # replayed: the same bytes again
         forger = Sealer("solo", b"not-the-secret")
         step2 = dict(step, sequenceId=2, action=sched.actions[0][1])
-        probe.publish("order", forger.seal("order", {"orderId": "o", "orderUpdateId": 2, "steps": [step2]}))
-        tampered = json.loads(probe.sealer.seal("order", {"orderId": "o", "orderUpdateId": 3, "steps": [step2]}))
+        probe.publish("order", forger.seal("order", {"nonce": probe.nonce, "orderId": "o", "orderUpdateId": 2,
+                                                     "steps": [step2]}))
+        tampered = json.loads(probe.seal("order", {"orderId": "o", "orderUpdateId": 3, "steps": [step2]}))
         tampered["steps"][0]["action"] = "wait"
         probe.publish("order", json.dumps(tampered).encode())
         probe.publish("order", b"{not json")
@@ -295,21 +310,60 @@ def test_forged_and_replayed_messages_are_rejected(case, tmp_path, embedded):
         stop_all(procs)
 
 
+def test_a_restarted_robot_ignores_the_orders_of_its_earlier_process(case, tmp_path, embedded):
+    # the earlier process's signed initialize and step-1 order, replayed to a fresh process of the
+    # same robot with no executor running: refused, and the robot does not move
+    inst, ip, sched, sp, _, _ = case
+    secret = "robot-secret-7"
+    single = load_instance(ip)
+    tiles = [[int(c) % single.width, int(c) // single.width] for c in np.flatnonzero(single.start.tiles)]
+    r = single.robots[0]
+    init = {"instance": Path(ip).read_text(), "index": 0, "lastStep": 0, "carrying": False, "tiles": tiles,
+            "pose": {"front": list(r.front), "back": list(r.back)}}
+    step = {"sequenceId": 1, "action": sched.actions[0][0], "released": True, "structure": {"picked": [], "placed": []}}
+    _, procs = spawn_robots(embedded, {"solo": secret}, tmp_path)
+    try:
+        probe = Probe(embedded, "solo", secret.encode())
+        first_nonce = probe.state()["nonce"]
+        recorded = [("instantActions", probe.seal("instantActions", {"actions": [
+            {"actionId": "init", "actionType": "initialize", "parameters": init}]})),
+            ("order", probe.seal("order", {"orderId": "o", "orderUpdateId": 1, "steps": [step]}))]
+        for kind, payload in recorded:
+            probe.publish(kind, payload)
+        assert probe.state()["lastStep"] == 1  # the live process acted on them
+        probe.client.disconnect()
+    finally:
+        stop_all(procs)
+    _, procs = spawn_robots(embedded, {"solo": secret}, tmp_path)
+    try:
+        probe = Probe(embedded, "solo", secret.encode())
+        probe.online(other_than=first_nonce)  # up, and nothing sent to it yet
+        for kind, payload in recorded:
+            probe.publish(kind, payload)
+        after = probe.state()
+        assert after["nonce"] != first_nonce
+        assert not after["initialized"] and after["lastStep"] == 0 and after["pose"] is None
+        assert after["counters"]["rejected"] == 2 and after["counters"]["executed"] == 0
+        probe.client.disconnect()
+    finally:
+        stop_all(procs)
+
+
 # ---- the protocol's gate, message by message --------------------------------------------------
 
 
 def test_the_gate_admits_each_signed_message_once():
     secret = b"s"
     sealer, gate = Sealer("r", secret), Gate({"r": secret})
-    first = sealer.seal("connection", {"connectionState": "ONLINE"})
+    first = sealer.seal("connection", {"nonce": "n", "connectionState": "ONLINE"})
     assert isinstance(gate.admit("r", "connection", first), dict)
     again = gate.admit("r", "connection", first)
     assert again.duplicate and "not above" in again.reason
-    later = sealer.seal("connection", {"connectionState": "OFFLINE"})
+    later = sealer.seal("connection", {"nonce": "n", "connectionState": "OFFLINE"})
     assert gate.admit("r", "connection", later)["connectionState"] == "OFFLINE"
     # a message of an older session (a replay from an earlier run) is refused
     old = Sealer("r", secret, session="0ld")
-    stale = json.loads(old.seal("connection", {"connectionState": "ONLINE"}))
+    stale = json.loads(old.seal("connection", {"nonce": "n", "connectionState": "ONLINE"}))
     stale["timestamp"] = "2000-01-01T00:00:00.000Z"
     stale.pop("signature")
     from bille.tools.execute.protocol import canonical, sign
@@ -333,7 +387,7 @@ def test_the_gate_rejects_forgery_schema_breaks_and_strangers():
     from bille.tools.execute.protocol import canonical, sign
 
     gate = Gate({"r": b"s", "q": b"t"})
-    good = json.loads(Sealer("r", b"s").seal("connection", {"connectionState": "ONLINE"}))
+    good = json.loads(Sealer("r", b"s").seal("connection", {"nonce": "n", "connectionState": "ONLINE"}))
     forged = dict(good, signature=sign({k: v for k, v in good.items() if k != "signature"}, b"x"))
     assert gate.admit("r", "connection", canonical(forged)).reason == "bad signature"
     body = {k: v for k, v in good.items() if k != "signature"}
@@ -341,7 +395,7 @@ def test_the_gate_rejects_forgery_schema_breaks_and_strangers():
     bad = canonical({**body, "signature": sign(body, b"s")})
     assert gate.admit("r", "connection", bad).reason.startswith("schema: connectionState")
     assert gate.admit("x", "connection", canonical(good)).reason == "unknown robot id"
-    other = Sealer("r", b"t").seal("connection", {"connectionState": "ONLINE"})  # r's message on q's topic
+    other = Sealer("r", b"t").seal("connection", {"nonce": "n", "connectionState": "ONLINE"})  # on q's topic
     assert "names robot 'r'" in gate.admit("q", "connection", other).reason
     with pytest.raises(ValueError, match="schema"):
         Sealer("r", b"s").seal("state", {"lastStep": -1})

@@ -46,8 +46,7 @@ def tiny_instance(seed: int, *, max_robots: int = 3):
     """One random tiny reconfiguration instance, or None where the draw is not a valid instance."""
     rnd = Random(seed)
     kind = rnd.choice(["point", "point", "S5", "S7", "mixed"])
-    W = rnd.randint(3, 5) if kind == "point" else rnd.randint(3, 5)
-    H = rnd.randint(2, 3)
+    W, H = rnd.randint(3, 5 if kind == "point" else 4), rnd.randint(2, 3)
     cells = [(x, y) for y in range(H) for x in range(W)]
     start = _blob(rnd, cells, rnd.randint(3, max(3, W * H - 3)))
     goal = set(start)
@@ -75,18 +74,21 @@ def tiny_instance(seed: int, *, max_robots: int = 3):
         used |= {front, back} - {None}
         if kind == "mixed":
             robot["moveset"] = ms
-        if rnd.random() < 0.25:
+        if rnd.random() < 0.35:
             robot["carrying"] = True
             ahead = None if back is None else (2 * front[0] - back[0], 2 * front[1] - back[1])
             if ahead is not None:
                 used.add(ahead)
         robots.append(robot)
-    carried = sum(1 for r in robots if r.get("carrying"))
-    for _ in range(carried):  # the carried tiles end in the structure
+    far = rnd.random() < 0.5  # a carried tile's goal far from its robot: a relay may pay
+    for robot in robots:  # the carried tiles end in the structure
+        if not robot.get("carrying"):
+            continue
         frontier = sorted({(x + dx, y + dy) for x, y in goal for dx, dy in STEPS} & set(cells) - goal)
         if not frontier:
             return None
-        goal.add(rnd.choice(frontier))
+        at = robot.get("at") or robot["front"]
+        goal.add(max(frontier, key=lambda c: abs(c[0] - at[0]) + abs(c[1] - at[1])) if far else rnd.choice(frontier))
     goals = None
     if rnd.random() < 0.3:
         goals = [list(rnd.choice(sorted(goal))) if rnd.random() < 0.5 else None for _ in robots]

@@ -118,6 +118,7 @@ class Executor:
         self.reports: dict[str, dict] = {}
         self.arrivals: dict[str, float] = {}
         self.connection: dict[str, str] = {}
+        self.nonces: dict[str, str] = {}  # each robot process's, from its reports
         self.released_at = 0.0
         self.round_trips: list[float] = []
         self.faults: list[Fault] = []
@@ -147,6 +148,9 @@ class Executor:
             self.client = None
 
     def send(self, robot: str, kind: str, body: dict) -> None:
+        """Sign and publish, tied to the robot's live process by its nonce (unknown before its
+        first report: then only a state request gets through)."""
+        body = {"nonce": self.nonces.get(robot, "unknown"), **body}
         self.client.publish(topic(self.s.fleet, robot, kind), self.sealers[robot].seal(kind, body), qos=1)
 
     def pump(self, timeout: float) -> None:
@@ -172,8 +176,10 @@ class Executor:
         elif parsed[2] == "state":
             self.reports[parsed[1]] = msg
             self.arrivals[parsed[1]] = at
+            self.nonces[parsed[1]] = msg["nonce"]
         else:
             self.connection[parsed[1]] = msg["connectionState"]
+            self.nonces[parsed[1]] = msg["nonce"]
 
     def request_state(self, robots, params=None, kind="stateRequest") -> None:
         for r in robots:

@@ -7,6 +7,13 @@ Every message carries ``headerId`` (counting up per sender session and topic), `
 HMAC-SHA256, keyed with the robot's shared secret, of the message's canonical JSON without the
 signature. :class:`Gate` is the receiving side: it drops malformed, unsigned, forged, duplicate,
 out-of-order and replayed messages and says why.
+
+Live runs: a robot process draws a fresh random ``nonce`` when it starts and sends it in every
+``connection`` and ``state`` message; the executor signs the robot's current nonce into every
+``order`` and ``instantActions`` message for it. A robot acts only on messages that carry its own
+nonce (:func:`tied_to`), so nothing recorded before it started (an earlier run's ``initialize``
+or orders, replayed) can move it; a ``stateRequest`` alone changes nothing and is answered
+whatever its nonce, which is how an executor learns the nonce of a robot it meets.
 """
 from __future__ import annotations
 
@@ -52,6 +59,19 @@ def now() -> str:
 
 def new_session() -> str:
     return secrets.token_hex(8)
+
+
+def new_nonce() -> str:
+    """A robot process's nonce: 128 random bits as hex."""
+    return secrets.token_hex(16)
+
+
+def tied_to(msg: dict, nonce: str) -> bool:
+    """Whether a robot with ``nonce`` may act on an admitted ``order`` or ``instantActions``
+    message: it carries that nonce, or it only asks for a state report."""
+    if msg["nonce"] == nonce:
+        return True
+    return "actions" in msg and all(a["actionType"] == "stateRequest" for a in msg["actions"])
 
 
 def canonical(body: dict) -> bytes:
@@ -100,13 +120,16 @@ _STEP = {
         },
     },
 }
+_NONCE = {"type": "string", "minLength": 1, "maxLength": 64}
 _BODIES = {
     "order": {
+        "nonce": _NONCE,
         "orderId": {"type": "string", "minLength": 1},
         "orderUpdateId": {"type": "integer", "minimum": 0},
         "steps": {"type": "array", "items": _STEP, "minItems": 1},
     },
     "instantActions": {
+        "nonce": _NONCE,
         "actions": {
             "type": "array", "minItems": 1,
             "items": {
@@ -120,6 +143,7 @@ _BODIES = {
         },
     },
     "state": {
+        "nonce": _NONCE,
         "initialized": {"type": "boolean"},
         "orderId": {"type": ["string", "null"]},
         "orderUpdateId": {"type": "integer", "minimum": 0},
@@ -152,7 +176,7 @@ _BODIES = {
         },
         "replyTo": {"type": ["string", "null"]},
     },
-    "connection": {"connectionState": {"enum": list(CONNECTION_STATES)}},
+    "connection": {"nonce": _NONCE, "connectionState": {"enum": list(CONNECTION_STATES)}},
 }
 SCHEMAS = {
     kind: {

@@ -24,8 +24,8 @@ from bille.instances.grid import is_connected
 from bille.instances.rules import State, Violation, World, apply
 
 from .broker import BrokerURL, close, connect
-from .protocol import (Gate, Sealer, parse_topic, pose_from_json, pose_json, tiles_digest, tiles_summary,
-                       topic)
+from .protocol import (Gate, Sealer, new_nonce, parse_topic, pose_from_json, pose_json, tied_to, tiles_digest,
+                       tiles_summary, topic)
 
 log = logging.getLogger("bille.robot")
 
@@ -66,6 +66,7 @@ class SimRobot:
         self.faults = faults or Faults()
         self.sealer = Sealer(robot_id, secret)
         self.gate = Gate({robot_id: secret})
+        self.nonce = new_nonce()  # this process's: messages of earlier runs do not carry it
         self.inbox: queue.Queue = queue.Queue()
         self.world: World | None = None
         self.graph = None
@@ -91,8 +92,8 @@ class SimRobot:
 
     def _announce(self) -> None:
         # ONLINE, then the last will with the next headerId: a broken connection is news
-        self.online = self.sealer.seal("connection", {"connectionState": "ONLINE"})
-        self.will = self.sealer.seal("connection", {"connectionState": "CONNECTIONBROKEN"})
+        self.online = self.sealer.seal("connection", {"nonce": self.nonce, "connectionState": "ONLINE"})
+        self.will = self.sealer.seal("connection", {"nonce": self.nonce, "connectionState": "CONNECTIONBROKEN"})
 
     def _connected(self, client) -> None:
         client.subscribe([(self._topic("order"), 1), (self._topic("instantActions"), 1)])
@@ -106,7 +107,7 @@ class SimRobot:
 
     def stop(self) -> None:
         if self.client is not None:
-            off = self.sealer.seal("connection", {"connectionState": "OFFLINE"})
+            off = self.sealer.seal("connection", {"nonce": self.nonce, "connectionState": "OFFLINE"})
             self.client.publish(self._topic("connection"), off, qos=1, retain=True).wait_for_publish(2)
             close(self.client)
             self.client = None
@@ -137,6 +138,12 @@ class SimRobot:
         if not isinstance(msg, dict):
             self.counters["duplicates" if msg.duplicate else "rejected"] += 1
             log.warning("%s", msg)
+            return
+        if not tied_to(msg, self.nonce):  # signed, but for a robot process that is gone
+            self.counters["rejected"] += 1
+            log.warning("dropped %s message for %s: nonce %s is not this process's (a replay of an earlier run)",
+                        parsed[2], self.id, msg["nonce"])
+            self.report()  # whoever runs the robots learns the current nonce
             return
         if parsed[2] == "instantActions":
             reply = None
@@ -245,6 +252,7 @@ class SimRobot:
 
     def state(self, reply_to: str | None = None) -> dict:
         return {
+            "nonce": self.nonce,
             "initialized": self.world is not None,
             "orderId": self.order_id,
             "orderUpdateId": self.order_update,

@@ -1,0 +1,187 @@
+"""Soundness: every lower bound and every claimed optimum against the brute-force search.
+
+A bound is a theorem about every schedule, so no part of it may exceed an optimum that the
+breadth-first search (``bfs``, the reference: every joint action under the canonical rules)
+proves; an instance that a static argument calls impossible must be one that the search
+exhausts; and both exact back ends must claim exactly the search's optimum. The instances are
+random tiny reconfigurations (``tinyworlds.py``): point robots and Bill-Es, 1-3 robots, carried
+tiles, tiles that must move, relays possible. A few dozen run in the quick suite, hundreds in the
+slow one.
+"""
+from __future__ import annotations
+
+import functools
+
+import pytest
+
+from bille.solvers import solve, validate
+from bille.solvers.bfs import plan as bfs
+from bille.solvers.bounds import lower_bound
+from helpers import make
+from tinyworlds import tiny_instances
+
+MAX_STATES = 5_000  # the reference gives up beyond this; such instances are not counted
+
+
+@functools.cache
+def reference(inst):
+    return bfs(inst, max_states=MAX_STATES)
+
+
+def check_bounds(instances) -> dict:
+    """Every bound part against the reference; returns counts of what was decided."""
+    counts = {"optimal": 0, "infeasible": 0, "undecided": 0}
+    for inst in instances:
+        ref, bounds = reference(inst), lower_bound(inst)
+        if ref.status == "optimal":
+            counts["optimal"] += 1
+            assert validate(inst, ref.schedule).valid
+            assert not bounds.impossible, (inst.name, bounds.impossible)
+            for part, value in bounds.parts.items():
+                assert value is None or value <= ref.lower_bound, (inst.name, part, value, ref.lower_bound)
+        elif ref.status == "infeasible":
+            counts["infeasible"] += 1
+        else:
+            counts["undecided"] += 1
+    return counts
+
+
+def check_exact(instances, methods=("cpsat", "sat"), limit: int = 8) -> int:
+    """Both exact back ends claim exactly the reference's optimum; returns how many were compared."""
+    compared = 0
+    for inst in instances:
+        ref = reference(inst)
+        if ref.status == "optimal":
+            for method in methods:
+                got = solve(inst, method, time_limit=60)
+                assert got.status == "optimal", (inst.name, method, got.status, got.stats.get("contradiction"))
+                assert got.metrics.makespan == ref.lower_bound == got.lower_bound, (inst.name, method)
+                assert validate(inst, got.schedule).valid
+            compared += 1
+        elif ref.status == "infeasible":
+            cap = lower_bound(inst).lower + 2
+            for method in methods:
+                got = solve(inst, method, max_makespan=max(cap, 1), time_limit=120)
+                assert got.schedule is None and got.status in ("infeasible", "unsolved"), (inst.name, method)
+            compared += 1
+        if compared >= limit:
+            break
+    return compared
+
+
+# ---- the relay of the report, and its kind ------------------------------------------------------
+
+RELAY = dict(grid="""
+    .....
+    ..TTT
+    ..TTT""", goal="""
+    .....
+    ..TTT
+    .TTTT""", robots=[{"at": [2, 2]}, {"at": [4, 2], "carrying": True}])
+
+
+@pytest.mark.parametrize("method", ["bfs", "cpsat", "sat"])
+def test_a_relay_beats_the_first_tile_moved(method):
+    # robot 0 picks the tile east of it (a tile that stays) and places it west; robot 1 refills
+    # the gap with the tile it carries: 2 steps, where "one robot carries a tile from a cell that
+    # must empty to one that must fill" would say 3
+    inst = make(RELAY["grid"], RELAY["robots"], goal=RELAY["goal"], moveset="point")
+    assert lower_bound(inst).lower <= 2
+    result = solve(inst, method, time_limit=60)
+    assert result.status == "optimal" and result.metrics.makespan == 2 == result.lower_bound
+    assert validate(inst, result.schedule).valid
+
+
+def test_a_carried_tile_goes_straight_to_where_it_is_needed():
+    # a Bill-E carrying a tile beside a cell to fill, and a tile that must go far away: the
+    # carried tile fills at once while the other robot moves the far tile
+    inst = make("""
+        TTTTT.
+        TTTTT.""", [{"front": [3, 0], "back": [2, 0], "carrying": True}, {"front": [1, 1], "back": [0, 1]}],
+        goal="""
+        TTTTTT
+        TTTTT.""", moveset="S7")
+    ref = reference(inst)
+    assert ref.status == "optimal"
+    bounds = lower_bound(inst)
+    assert all(v is None or v <= ref.lower_bound for v in bounds.parts.values())
+    for method in ("cpsat", "sat"):
+        assert solve(inst, method, time_limit=60).metrics.makespan == ref.lower_bound
+
+
+def test_solve_refuses_a_bound_above_the_makespan(monkeypatch):
+    # a method whose proof contradicts its own valid schedule is reported as an error
+    import bille.solvers as solvers
+    from bille.solvers.result import Result
+
+    inst = make("TTTT", [{"at": [0, 0]}], moveset="point", robot_goals=[[3, 0]])
+    good = bfs(inst)
+
+    def lying(instance, *, time_limit: float | None = None):
+        return Result("bfs", "optimal", good.schedule, lower_bound=good.lower_bound + 1)
+
+    monkeypatch.setitem(solvers.METHODS._loaded, "bfs", lying)
+    result = solve(inst, "bfs")
+    assert result.status == "error" and "above the makespan" in result.stats["contradiction"]
+
+
+def test_solve_refuses_an_optimum_without_its_proof(monkeypatch):
+    import bille.solvers as solvers
+    from bille.solvers.result import Result
+
+    inst = make("TTTT", [{"at": [0, 0]}], moveset="point", robot_goals=[[2, 0]])
+    detour = bfs(make("TTTT", [{"at": [0, 0]}], moveset="point", robot_goals=[[3, 0]]))
+    # walk to the end and back: valid, 4 steps, but the optimum is 2
+    from bille.solvers import schedule_from_text
+    schedule = schedule_from_text("robots:\n  - [east, east, east, west]\n")
+    assert detour.status == "optimal"
+
+    def lying(instance, *, time_limit: float | None = None):
+        return Result("bfs", "optimal", schedule, lower_bound=2)
+
+    monkeypatch.setitem(solvers.METHODS._loaded, "bfs", lying)
+    result = solve(inst, "bfs")
+    assert result.status == "error" and "claimed with a proof of 2" in result.stats["contradiction"]
+
+
+def test_a_relay_found_by_the_random_search():
+    # tiny-70 of tinyworlds: robot 1 picks the tile beside it and sets it down on the cell to
+    # fill while robot 0 puts its tile in the gap (3 steps; the carrier alone needs 5)
+    inst = make("""
+        .TT.
+        .TTT
+        ...T""", [{"at": [3, 2], "carrying": True}, {"at": [2, 0]}], goal="""
+        TTT.
+        .TTT
+        ...T""", moveset="point")
+    assert reference(inst).lower_bound == 3
+    assert lower_bound(inst).lower <= 3
+    for method in ("cpsat", "sat"):
+        result = solve(inst, method, time_limit=60)
+        assert result.status == "optimal" and result.metrics.makespan == 3
+
+
+# ---- random tiny instances ----------------------------------------------------------------------
+
+QUICK = tiny_instances(30)
+MANY = tiny_instances(150, first_seed=10_000)
+
+
+def test_bounds_never_exceed_the_optimum():
+    counts = check_bounds(QUICK)
+    assert counts["optimal"] >= 12 and counts["infeasible"] >= 3, counts
+
+
+def test_exact_back_ends_claim_the_optimum():
+    assert check_exact(QUICK, limit=10) == 10
+
+
+@pytest.mark.slow
+def test_bounds_never_exceed_the_optimum_on_many():
+    counts = check_bounds(MANY)
+    assert counts["optimal"] >= 60, counts
+
+
+@pytest.mark.slow
+def test_exact_back_ends_claim_the_optimum_on_many():
+    assert check_exact(MANY, limit=50) == 50
