@@ -164,7 +164,7 @@ def test_a_relay_found_by_the_random_search():
 # ---- random tiny instances ----------------------------------------------------------------------
 
 QUICK = tiny_instances(30)
-MANY = tiny_instances(150, first_seed=10_000)
+MANY = tiny_instances(200, first_seed=10_000, max_robots=2)  # 3 robots make the reference slow
 
 
 def test_bounds_never_exceed_the_optimum():
@@ -179,7 +179,7 @@ def test_exact_back_ends_claim_the_optimum():
 @pytest.mark.slow
 def test_bounds_never_exceed_the_optimum_on_many():
     counts = check_bounds(MANY)
-    assert counts["optimal"] >= 60, counts
+    assert counts["optimal"] >= 80 and counts["infeasible"] >= 40, counts
 
 
 @pytest.mark.slow
