@@ -15,8 +15,10 @@ from typing import Iterator
 import numpy as np
 
 from bille.instances import Instance, OptionError
+from bille.instances.result import Result
+from bille.instances.schedule import Schedule
 
-from .walking import UNREACHABLE, Walk, walk_for
+from bille.instances.walking import UNREACHABLE, Walk, walk_for
 
 Poses = tuple[int, ...]
 Debts = tuple[int, ...]
@@ -127,12 +129,12 @@ class JointProblem:
 NO_WALK = "no walking schedule on the fixed structure (a schedule that moves tiles may exist)"
 
 
-def require_path_planning(instance: Instance) -> None:
+def require_path_planning(instance: Instance, method: str = "astar") -> None:
     """The walking planners plan on a structure that does not change."""
     if instance.is_reconfiguration:
         raise OptionError(
-            f"instance '{instance.name}' moves tiles; astar plans robot paths on a fixed structure "
-            "(path-planning instances); use temporal-astar or mstar, which run the reconfiguration loop")
+            f"instance '{instance.name}' moves tiles; {method} here plans robot paths on a fixed structure "
+            "(path-planning instances); the methods temporal-astar and mstar run the reconfiguration loop")
 
 
 def schedule_ids(instance: Instance, steps: list[tuple[int, ...]]) -> np.ndarray:
@@ -144,11 +146,8 @@ def schedule_ids(instance: Instance, steps: list[tuple[int, ...]]) -> np.ndarray
 
 
 def to_result(instance: Instance, method: str, status: str, steps: list | None, *, stats: dict):
-    """A :class:`~bille.solvers.result.Result` from a list of joint actions (or None). The
+    """A :class:`~bille.instances.result.Result` from a list of joint actions (or None). The
     planners prove no lower bound: ``solve()`` adds the static one."""
-    from bille.solvers.result import Result
-    from bille.solvers.schedule import Schedule
-
     schedule = None
     if steps is not None:
         schedule = Schedule.from_ids(instance, schedule_ids(instance, steps), meta={"method": method})

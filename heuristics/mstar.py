@@ -34,10 +34,10 @@ INF = (1 << 60, 0)
 
 
 def plan(instance: Instance, *, epsilon: float = 1.0, od: bool = True, time_limit: float | None = None,
-         max_expansions: int = 5_000_000, load_transfer: bool = False, d_tr: int = 5, max_steps: int | None = None):
-    """M*: minimum sum of costs (then makespan) on a fixed structure; on an instance that moves
-    tiles, the motion layer of the reconfiguration loop (:mod:`.reconfigure`), which is not
-    optimal.
+         max_expansions: int = 5_000_000):
+    """M*: minimum sum of costs (then makespan) on a fixed structure (the method ``mstar`` hands
+    an instance that moves tiles to the reconfiguration loop, :mod:`.reconfigure`, with M* as
+    its motion layer, which is not optimal).
 
     Parameters
     ----------
@@ -45,15 +45,9 @@ def plan(instance: Instance, *, epsilon: float = 1.0, od: bool = True, time_limi
     od : expand coupled robots one at a time (operator decomposition).
     time_limit : seconds before giving up with status ``timeout``.
     max_expansions : expansions (of vertices and intermediate nodes) before ``unsolved``.
-    load_transfer, d_tr, max_steps : reconfiguration only (see :func:`.reconfigure.plan`).
     """
     if epsilon < 1:
         raise OptionError(f"mstar: epsilon must be >= 1, got {epsilon}")
-    if instance.is_reconfiguration:
-        from .reconfigure import plan as reconfigure
-
-        return reconfigure(instance, motion="mstar", load_transfer=load_transfer, d_tr=d_tr, epsilon=epsilon,
-                           time_limit=time_limit, max_steps=max_steps)
     return _MStar(JointProblem.of(instance), epsilon, od, time_limit, max_expansions).run()
 
 

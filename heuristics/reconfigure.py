@@ -49,9 +49,9 @@ from bille.instances.rules import State, apply
 
 from .joint import JointProblem, to_result
 from .sequence import Job, NoSequence, apply_move, sequence_of
-from .spacetime import window
-from .temporal_astar import _shift_up, _timing
-from .walking import UNREACHABLE, Walk, walk_for
+from .spacetime import reservation_step
+from .temporal_astar import shift_up, timing
+from bille.instances.walking import UNREACHABLE, Walk, walk_for
 
 MOTIONS = ("temporal-astar", "mstar")
 MSTAR_EXPANSIONS = 100_000  # per M* replan: a joint plan that needs more ends the run
@@ -122,7 +122,7 @@ def plan(instance: Instance, *, motion: str = "temporal-astar", load_transfer: b
          epsilon: float = 1.0, horizon: int = 5, time_limit: float | None = None, max_steps: int | None = None,
          max_shifts: int | None = None, priorities: list[int] | None = None, method: str | None = None):
     """Run the reconfiguration loop (module docstring); returns a
-    :class:`~bille.solvers.result.Result` named ``method`` (default: ``motion``).
+    :class:`~bille.instances.result.Result` named ``method`` (default: ``motion``).
 
     ``motion``: ``temporal-astar`` or ``mstar``; ``load_transfer`` and ``d_tr``: equations
     (1)-(3); ``epsilon``, ``horizon``, ``priorities`` (the initial ``Q``): as for Temporal A*;
@@ -532,22 +532,14 @@ class Loop:
                 reserved[t] |= here | cells
             joint[i] = self.world.graphs[i].wait
         order = [i for i in self.Q if i not in fixed and i not in intents]
-        below: list[set[int]] = [set() for _ in range(len(order) + 1)]
-        for rank in range(len(order) - 1, -1, -1):
-            j = order[rank]
-            below[rank] = below[rank + 1] | self._cells_now(j)
-        for rank, i in enumerate(order):
-            walk = self.walk(i)
-            dist, home = self._as_lists(goals[i])
-            avoid = [r | below[rank + 1] for r in reserved] if cautious else reserved
-            path = window(walk, dist, home, poses[i], H, avoid, below[rank + 1], self.epsilon, self.stats)
-            if path is None:
-                return None, i
-            p = poses[i]
-            for t, (a, q) in enumerate(path, start=1):
-                reserved[t].update(walk.cells(p, a))
-                p = q
-            joint[i] = path[0][0]
+        walks = {i: self.walk(i) for i in order}
+        targets = {i: self._as_lists(goals[i]) for i in order}
+        first, blocked = reservation_step(order, walks, targets, poses, H, reserved, self._cells_now,
+                                          self.epsilon, self.stats, cautious)
+        if first is None:
+            return None, blocked
+        for i, a in first.items():
+            joint[i] = a
         return joint, None
 
     def _mstar(self, fixed: dict[int, int], goals: list) -> list[int] | None:
@@ -623,7 +615,7 @@ class Loop:
 
         def stop(reason: str, status: str = "unsolved"):
             self.stats["failure"] = reason
-            _timing(self.stats, step_times)
+            timing(self.stats, step_times)
             return to_result(self.instance, method, status, None, stats=self.stats)
 
         while not self.done():
@@ -645,7 +637,7 @@ class Loop:
                         continue
                     return stop("deadlock")
                 busy = [i for i in self.Q if self.legs[i] or self.goal(i) is not None] or list(self.Q)
-                _shift_up(self.Q, busy[-1])
+                shift_up(self.Q, busy[-1])
                 self.stats["priority_shifts"] += 1
                 self.stats["circle_shifts"] += 1
                 continue
@@ -662,7 +654,7 @@ class Loop:
                 for _ in range(len(self.Q)):  # a blocked robot moves up in Q (the paper's rule)
                     if blocked is None:
                         break
-                    _shift_up(self.Q, blocked)
+                    shift_up(self.Q, blocked)
                     self.stats["priority_shifts"] += 1
                     self.stats["replans"] += 1
                     joint, blocked = self._temporal(fixed, goals, intents)
@@ -683,7 +675,7 @@ class Loop:
             if self.motion == "mstar" and not fixed:  # the cached plan holds while it is followed
                 self._joint_key = (nxt.key(), tuple(id(g) for g in goals), ())
             self.stats["steps"] = len(self.steps)
-        _timing(self.stats, step_times)
+        timing(self.stats, step_times)
         self.stats["final_priorities"] = list(self.Q)
         return to_result(self.instance, method, "feasible", self.steps, stats=self.stats)
 

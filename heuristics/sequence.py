@@ -32,7 +32,7 @@ import numpy as np
 from bille.instances import Instance, InstanceError
 from bille.instances.grid import articulation_points, is_connected, neighbour_table
 
-from .walking import UNREACHABLE, walk_for
+from bille.instances.walking import runnable, walk_for
 
 
 @dataclass(frozen=True)
@@ -182,23 +182,6 @@ def _critical(tiles: np.ndarray, empty: list[int], fill: list[int], graph) -> di
 
 def _carry(p: int, q: int, w: int) -> int:
     return abs(p % w - q % w) + abs(p // w - q // w)
-
-
-def runnable(tiles: np.ndarray, cut: np.ndarray, pick: int, place: int, nbr, graph, w: int, h: int) -> bool:
-    """Whether the job can run now on ``tiles`` (``cut``: their articulation points, ``nbr``:
-    :func:`~bille.instances.grid.neighbour_table`): it keeps the tiles connected, and a robot of
-    ``graph`` can stand facing the pick and carry the tile to a pose facing the place."""
-    if cut[pick] or tiles[place] or tiles.sum() <= 1:
-        return False
-    rest = tiles.copy()
-    rest[pick] = False
-    if not any(n >= 0 and rest[n] for n in nbr[place]):
-        return False
-    pick_poses = walk_for(graph, tiles).facing_poses(pick)
-    carry = walk_for(graph, rest, carrying=True)
-    to_place = carry.facing_distances(place)
-    # the picking pose stands on the tiles that remain (a pose facing the pick never stands on it)
-    return bool(len(pick_poses)) and bool((to_place[pick_poses] < UNREACHABLE).any())
 
 
 def _order(tiles: np.ndarray, empty: list[int], fill: list[int], graph, w: int, h: int,

@@ -11,7 +11,7 @@ from __future__ import annotations
 import heapq
 import itertools
 
-from .walking import Walk
+from bille.instances.walking import Walk
 
 
 def window(walk: Walk, dist: list[int] | None, home: list[bool] | None, pose: int, H: int,
@@ -75,3 +75,34 @@ def _unwind(parent: dict, node) -> list[tuple[int, int]]:
         path.append((a, node[0]))
         node = prev
     return path[::-1]
+
+
+def reservation_step(order: list[int], walks: list[Walk], goals: list, poses, H: int,
+                     reserved: list[set[int]], here, epsilon: float = 1.0, stats: dict | None = None,
+                     cautious: bool = False) -> tuple[dict[int, int] | None, int | None]:
+    """One step of prioritized planning: the robots of ``order`` (highest priority first) plan
+    their windows one after another, each avoiding the cells reserved by those before it and, at
+    the first step, the cells ``here(j)`` of every robot ``j`` below it. ``goals[i]`` is robot
+    ``i``'s ``(dist, home)`` pair for :func:`window`; ``reserved`` is updated in place.
+    ``cautious``: a robot keeps off the lower robots' cells for the whole window.
+
+    Returns ``({robot: first action}, None)``, or ``(None, robot)`` for the first robot that
+    finds no walk. Temporal A* and the reconfiguration loop share it.
+    """
+    below: list[set[int]] = [set() for _ in range(len(order) + 1)]
+    for rank in range(len(order) - 1, -1, -1):
+        below[rank] = below[rank + 1] | set(here(order[rank]))
+    first: dict[int, int] = {}
+    for rank, i in enumerate(order):
+        walk = walks[i]
+        dist, home = goals[i]
+        avoid = [r | below[rank + 1] for r in reserved] if cautious else reserved
+        path = window(walk, dist, home, poses[i], H, avoid, below[rank + 1], epsilon, stats)
+        if path is None:
+            return None, i
+        p = poses[i]
+        for t, (a, q) in enumerate(path, start=1):
+            reserved[t].update(walk.cells(p, a))
+            p = q
+        first[i] = path[0][0]
+    return first, None

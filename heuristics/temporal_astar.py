@@ -26,15 +26,15 @@ import numpy as np
 from bille.instances import Instance, OptionError
 from bille.instances.rules import State, apply
 
-from .joint import JointProblem, to_result
-from .spacetime import window
+from .joint import JointProblem, require_path_planning, to_result
+from .spacetime import reservation_step
 
 
 def plan(instance: Instance, *, epsilon: float = 1.0, horizon: int = 5, time_limit: float | None = None,
          max_steps: int | None = None, max_shifts: int | None = None, shift_priorities: bool = True,
-         priorities: list[int] | None = None, load_transfer: bool = False, d_tr: int = 5):
-    """Temporal A*: on a fixed structure, or as the motion layer of the reconfiguration loop
-    (:mod:`.reconfigure`) when the instance moves tiles.
+         priorities: list[int] | None = None):
+    """Temporal A* on a fixed structure (the method ``temporal-astar`` hands an instance that
+    moves tiles to the reconfiguration loop, :mod:`.reconfigure`, instead).
 
     Parameters
     ----------
@@ -45,17 +45,8 @@ def plan(instance: Instance, *, epsilon: float = 1.0, horizon: int = 5, time_lim
     max_shifts : budget of priority shifts (default: 4 m^2 for m robots).
     shift_priorities : False keeps ``Q`` fixed (for comparison): a blocked robot then ends the run.
     priorities : the initial ``Q`` (default: robot ids in order).
-    load_transfer, d_tr : reconfiguration only: exchange loads between robots within Manhattan
-        distance ``d_tr`` (paper, equations (1)-(3)).
     """
-    if instance.is_reconfiguration:
-        if not shift_priorities:
-            raise OptionError("temporal-astar: shift_priorities=false is for path planning only")
-        from .reconfigure import plan as reconfigure
-
-        return reconfigure(instance, motion="temporal-astar", load_transfer=load_transfer, d_tr=d_tr,
-                           epsilon=epsilon, horizon=horizon, time_limit=time_limit, max_steps=max_steps,
-                           max_shifts=max_shifts, priorities=priorities)
+    require_path_planning(instance, "temporal-astar")
     m = instance.num_robots
     if epsilon < 1:
         raise OptionError(f"temporal-astar: epsilon must be >= 1, got {epsilon}")
@@ -86,7 +77,7 @@ def plan(instance: Instance, *, epsilon: float = 1.0, horizon: int = 5, time_lim
 
     def stop(reason: str):
         stats["failure"] = reason
-        _timing(stats, step_times)
+        timing(stats, step_times)
         status = "timeout" if reason == "time limit" else "unsolved"
         return to_result(instance, "temporal-astar", status, None, stats=stats)
 
@@ -99,7 +90,7 @@ def plan(instance: Instance, *, epsilon: float = 1.0, horizon: int = 5, time_lim
             if not shift_priorities or stats["priority_shifts"] >= max_shifts:
                 return stop("deadlock")
             stuck = [i for i in Q if not problem.at_goal(i, state.poses[i])]
-            _shift_up(Q, stuck[-1])
+            shift_up(Q, stuck[-1])
             stats["priority_shifts"] += 1
             continue
         seen.add((state.poses, tuple(Q)))
@@ -112,7 +103,7 @@ def plan(instance: Instance, *, epsilon: float = 1.0, horizon: int = 5, time_lim
             if not shift_priorities or stats["priority_shifts"] >= max_shifts:
                 step_times.append(time.perf_counter() - t0)
                 return stop("deadlock")
-            _shift_up(Q, blocked)
+            shift_up(Q, blocked)
             stats["priority_shifts"] += 1
             stats["replans"] += 1
         step_times.append(time.perf_counter() - t0)
@@ -124,48 +115,31 @@ def plan(instance: Instance, *, epsilon: float = 1.0, horizon: int = 5, time_lim
         steps.append(tuple(first))
         state = nxt
         stats["steps"] = len(steps)
-    _timing(stats, step_times)
+    timing(stats, step_times)
     stats["final_priorities"] = list(Q)
     return to_result(instance, "temporal-astar", "feasible", steps, stats=stats)
 
 
 def _plan_step(problem: JointProblem, poses, Q: list[int], H: int, epsilon: float, dists, feet, stats):
-    """Plan every robot's window in the order of ``Q``. Returns ``(first actions, None)`` or
+    """Plan every robot's window in the order of ``Q`` (:func:`.spacetime.reservation_step`;
+    lower robots are seen by their feet at the first step). Returns ``(first actions, None)`` or
     ``(None, robot)`` for the first robot that finds no walk."""
-    # the feet of the robots below each rank of Q (seen by that robot at the first step only)
-    below: list[set[int]] = [set() for _ in range(len(Q) + 1)]
-    for rank in range(len(Q) - 1, -1, -1):
-        j = Q[rank]
-        below[rank] = below[rank + 1] | set(feet[j][poses[j]])
     reserved: list[set[int]] = [set() for _ in range(H + 1)]
-    first = [0] * len(poses)
-    for rank, i in enumerate(Q):
-        path = window(problem.walks[i], dists[i], problem.home_lists[i], poses[i], H, reserved, below[rank + 1],
-                      epsilon, stats)
-        if path is None:
-            return None, i
-        p = poses[i]
-        for t, (a, q) in enumerate(path, start=1):
-            reserved[t].update(_cells(problem, i, p, a))
-            p = q
-        first[i] = path[0][0]
-    return first, None
+    goals = list(zip(dists, problem.home_lists))
+    first, blocked = reservation_step(Q, problem.walks, goals, poses, H, reserved,
+                                      lambda j: feet[j][poses[j]], epsilon, stats)
+    return (None, blocked) if first is None else ([first[i] for i in range(len(poses))], None)
 
 
-def _cells(problem: JointProblem, i: int, pose: int, action: int) -> frozenset:
-    for a, _, cells in problem.walks[i].moves(pose):
-        if a == action:
-            return cells
-    raise KeyError(action)
-
-
-def _shift_up(Q: list[int], robot: int) -> None:
+def shift_up(Q: list[int], robot: int) -> None:
+    """Move ``robot`` up one place in the priority queue ``Q``."""
     k = Q.index(robot)
     if k > 0:
         Q[k - 1], Q[k] = Q[k], Q[k - 1]
 
 
-def _timing(stats: dict, step_times: list[float]) -> None:
+def timing(stats: dict, step_times: list[float]) -> None:
+    """Mean and largest planning time per step, in ms, into ``stats``."""
     if step_times:
         stats["plan_ms_mean"] = round(1000 * float(np.mean(step_times)), 3)
         stats["plan_ms_max"] = round(1000 * float(np.max(step_times)), 3)

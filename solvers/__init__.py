@@ -11,11 +11,11 @@ import time as _time
 from bille.instances import Instance, OptionError
 
 from .bounds import Bounds, lower_bound
-from .metrics import Metrics, metrics
+from bille.instances.metrics import Metrics, metrics
 from .options import check_options
 from .registry import METHODS
-from .result import STATUSES, Result
-from .schedule import Schedule, bind, dump_schedule, load_schedule, save_schedule, schedule_from_text
+from bille.instances.result import STATUSES, Result
+from bille.instances.schedule import Schedule, bind, dump_schedule, load_schedule, save_schedule, schedule_from_text
 from .validate import Report, validate
 
 

@@ -15,8 +15,8 @@ from bille.instances import Instance, OptionError
 from bille.instances.moveset import Kind
 from bille.instances.rules import State, apply, goal_violation
 
-from .result import Result
-from .schedule import Schedule
+from bille.instances.result import Result
+from bille.instances.schedule import Schedule
 
 
 def candidate_actions(instance: Instance, state: State, i: int) -> list[int]:

@@ -32,9 +32,9 @@ from bille.instances import Instance, OptionError
 from bille.instances.rules import goal_violation
 
 from .bounds import Bounds, lower_bound
-from .metrics import metrics
-from .result import Result
-from .schedule import Schedule, bind
+from bille.instances.metrics import metrics
+from bille.instances.result import Result
+from bille.instances.schedule import Schedule, bind
 
 SAT, UNSAT, UNKNOWN = "sat", "unsat", "unknown"
 

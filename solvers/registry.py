@@ -1,42 +1,59 @@
 """The method registry: method name -> ``plan(instance, **options) -> Result``.
 
-Methods live in several packages (``bille.solvers`` for the exact ones, ``bille.heuristics``
-for the planners), and those import the ``Result`` and ``Schedule`` types from here; the
-registry is therefore filled on first use, which keeps imports one-way at load time.
+An explicit dict, in the order shown to users. The paper's planners walk on a fixed structure;
+on an instance that moves tiles, ``temporal-astar`` and ``mstar`` are the motion layer of the
+reconfiguration loop (:mod:`bille.heuristics.reconfigure`). Which function serves an instance is
+decided here, not by the planners.
 """
 from __future__ import annotations
 
-from collections.abc import Mapping
-from importlib import import_module
-from typing import Callable, Iterator
+from typing import Callable
 
-# name -> "module:function"; the order is the order shown to users
-_ENTRIES = {
-    "astar": "bille.heuristics.astar:plan",
-    "mstar": "bille.heuristics.mstar:plan",
-    "temporal-astar": "bille.heuristics.temporal_astar:plan",
-    "cpsat": "bille.solvers.exact:plan_cpsat",
-    "sat": "bille.solvers.exact:plan_sat",
-    "bfs": "bille.solvers.bfs:plan",
+from bille.heuristics import astar, mstar, reconfigure, temporal_astar
+from bille.instances import Instance, OptionError
+from bille.instances.result import Result
+
+from . import bfs, exact
+
+
+def plan_temporal_astar(instance: Instance, *, epsilon: float = 1.0, horizon: int = 5,
+                        time_limit: float | None = None, max_steps: int | None = None,
+                        max_shifts: int | None = None, shift_priorities: bool = True,
+                        priorities: list[int] | None = None, load_transfer: bool = False,
+                        d_tr: int = 5) -> Result:
+    """Temporal A* (:func:`bille.heuristics.temporal_astar.plan`); on an instance that moves tiles,
+    the reconfiguration loop with Temporal A* as its motion layer (``load_transfer``, ``d_tr``:
+    equations (1)-(3) of the paper)."""
+    if instance.is_reconfiguration:
+        if not shift_priorities:
+            raise OptionError("temporal-astar: shift_priorities=false is for path planning only")
+        return reconfigure.plan(instance, motion="temporal-astar", load_transfer=load_transfer, d_tr=d_tr,
+                                epsilon=epsilon, horizon=horizon, time_limit=time_limit, max_steps=max_steps,
+                                max_shifts=max_shifts, priorities=priorities)
+    return temporal_astar.plan(instance, epsilon=epsilon, horizon=horizon, time_limit=time_limit,
+                               max_steps=max_steps, max_shifts=max_shifts, shift_priorities=shift_priorities,
+                               priorities=priorities)
+
+
+def plan_mstar(instance: Instance, *, epsilon: float = 1.0, od: bool = True, time_limit: float | None = None,
+               max_expansions: int = 5_000_000, load_transfer: bool = False, d_tr: int = 5,
+               max_steps: int | None = None) -> Result:
+    """M* (:func:`bille.heuristics.mstar.plan`); on an instance that moves tiles, the
+    reconfiguration loop with M* as its motion layer (``load_transfer``, ``d_tr``, ``max_steps``
+    as for the loop)."""
+    if instance.is_reconfiguration:
+        if epsilon < 1:
+            raise OptionError(f"mstar: epsilon must be >= 1, got {epsilon}")
+        return reconfigure.plan(instance, motion="mstar", load_transfer=load_transfer, d_tr=d_tr, epsilon=epsilon,
+                                time_limit=time_limit, max_steps=max_steps)
+    return mstar.plan(instance, epsilon=epsilon, od=od, time_limit=time_limit, max_expansions=max_expansions)
+
+
+METHODS: dict[str, Callable[..., Result]] = {
+    "astar": astar.plan,
+    "mstar": plan_mstar,
+    "temporal-astar": plan_temporal_astar,
+    "cpsat": exact.plan_cpsat,
+    "sat": exact.plan_sat,
+    "bfs": bfs.plan,
 }
-
-
-class _Registry(Mapping):
-    def __init__(self, entries: dict[str, str]) -> None:
-        self._entries = entries
-        self._loaded: dict[str, Callable] = {}
-
-    def __getitem__(self, name: str) -> Callable:
-        if name not in self._loaded:
-            module, func = self._entries[name].split(":")
-            self._loaded[name] = getattr(import_module(module), func)
-        return self._loaded[name]
-
-    def __iter__(self) -> Iterator[str]:
-        return iter(self._entries)
-
-    def __len__(self) -> int:
-        return len(self._entries)
-
-
-METHODS: Mapping[str, Callable] = _Registry(_ENTRIES)

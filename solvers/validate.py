@@ -10,8 +10,8 @@ from dataclasses import dataclass
 from bille.instances import Instance
 from bille.instances.rules import State, Violation, goal_violation, run
 
-from .metrics import Metrics, metrics
-from .schedule import Schedule, bind
+from bille.instances.metrics import Metrics, metrics
+from bille.instances.schedule import Schedule, bind
 
 
 @dataclass(frozen=True)

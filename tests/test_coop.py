@@ -15,7 +15,7 @@ from bille.instances.generators.hampath import bound, search_optimum
 from bille.instances.moveset import Kind
 from bille.instances.rules import State, run
 from bille.solvers import Schedule, solve, validate
-from bille.solvers.schedule import bind
+from bille.instances.schedule import bind
 
 
 def _manipulations(inst, schedule) -> list[tuple[int, int, str, int]]:

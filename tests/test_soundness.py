@@ -112,7 +112,7 @@ def test_a_carried_tile_goes_straight_to_where_it_is_needed():
 def test_solve_refuses_a_bound_above_the_makespan(monkeypatch):
     # a method whose proof contradicts its own valid schedule is reported as an error
     import bille.solvers as solvers
-    from bille.solvers.result import Result
+    from bille.instances.result import Result
 
     inst = make("TTTT", [{"at": [0, 0]}], moveset="point", robot_goals=[[3, 0]])
     good = bfs(inst)
@@ -120,14 +120,14 @@ def test_solve_refuses_a_bound_above_the_makespan(monkeypatch):
     def lying(instance, *, time_limit: float | None = None):
         return Result("bfs", "optimal", good.schedule, lower_bound=good.lower_bound + 1)
 
-    monkeypatch.setitem(solvers.METHODS._loaded, "bfs", lying)
+    monkeypatch.setitem(solvers.METHODS, "bfs", lying)
     result = solve(inst, "bfs")
     assert result.status == "error" and "above the makespan" in result.stats["contradiction"]
 
 
 def test_solve_refuses_an_optimum_without_its_proof(monkeypatch):
     import bille.solvers as solvers
-    from bille.solvers.result import Result
+    from bille.instances.result import Result
 
     inst = make("TTTT", [{"at": [0, 0]}], moveset="point", robot_goals=[[2, 0]])
     detour = bfs(make("TTTT", [{"at": [0, 0]}], moveset="point", robot_goals=[[3, 0]]))
@@ -139,7 +139,7 @@ def test_solve_refuses_an_optimum_without_its_proof(monkeypatch):
     def lying(instance, *, time_limit: float | None = None):
         return Result("bfs", "optimal", schedule, lower_bound=2)
 
-    monkeypatch.setitem(solvers.METHODS._loaded, "bfs", lying)
+    monkeypatch.setitem(solvers.METHODS, "bfs", lying)
     result = solve(inst, "bfs")
     assert result.status == "error" and "claimed with a proof of 2" in result.stats["contradiction"]
 

@@ -166,7 +166,7 @@ def plot(rows: list[dict], time_limit: float, path: Path) -> None:
 
 def crowd_instance(size: int, robots: int, seed: int):
     """A ``size`` square of tiles with ~8% holes, ``robots`` S7 robots and random goal cells."""
-    from bille.heuristics.walking import UNREACHABLE, walk_for
+    from bille.instances.walking import UNREACHABLE, walk_for
     from bille.instances import Grid, Instance, Robot, check_instance, load_moveset
 
     from .bench_core import holey_square

@@ -177,7 +177,7 @@ def gen_coop(graph_file, vertices, scale, start, end, gap, search, schedule_file
         if start or end or search:
             raise click.UsageError("--start, --end and --search need a GRAPH or --vertices")
         if schedule_file:
-            from bille.solvers.schedule import Schedule, save_schedule
+            from bille.instances.schedule import Schedule, save_schedule
 
             save_schedule(Schedule(demonstration(gap), meta={"method": "demonstration (gen coop)"}), schedule_file)
         return _output(gadget(gap), output, as_json)

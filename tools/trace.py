@@ -15,8 +15,8 @@ import numpy as np
 
 from bille.instances import Instance, Kind, State, Violation
 from bille.instances.rules import goal_violation, run
-from bille.solvers.metrics import action_kinds
-from bille.solvers.schedule import Schedule, bind
+from bille.instances.metrics import action_kinds
+from bille.instances.schedule import Schedule, bind
 
 XY = tuple[int, int]
 

@@ -48,6 +48,8 @@ from ..instance import Instance, Robot, check_instance
 from ..limits import check_size
 from ..moveset import Kind, load_moveset
 from ..rules import State, apply
+from ..schedule import Schedule
+from ..walking import Walk
 from .graphs import draw_graph, hamiltonian_path
 
 XY = tuple[int, int]
@@ -197,9 +199,6 @@ def search_optimum(inst: Instance, limit: int, *, max_states: int = 2_000_000):
     Raises :class:`InstanceError` for more than one robot, a robot that is not ``point``, or a
     task cell with other than one tile neighbour, and when ``max_states`` are stored.
     """
-    from bille.heuristics.walking import Walk
-    from bille.solvers.schedule import Schedule
-
     if inst.num_robots != 1 or inst.movesets[0].footprint != "point":
         raise InstanceError("search_optimum: one point robot only")
     world = inst.world

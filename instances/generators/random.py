@@ -25,6 +25,7 @@ from ..instance import Instance, Robot, Task, check_instance
 from ..limits import check_size
 from ..moveset import load_moveset
 from ..posegraph import compile_posegraph
+from ..walking import UNREACHABLE, runnable, walk_for
 
 XY = tuple[int, int]
 _STEPS = ((1, 0), (-1, 0), (0, 1), (0, -1))
@@ -230,8 +231,6 @@ def _random_move(now: np.ndarray, start: np.ndarray, held: set, width: int, heig
     """A tile of the start still in place that may be picked, and an empty cell never a start
     tile next to the rest, so that every move adds one to the difference; a robot of ``graph``
     must be able to pick the tile and carry it to face the place."""
-    from bille.heuristics.sequence import runnable
-
     nbr = neighbour_table(width, height)
     cut = articulation_points(now, width, height)
     picks = [c for c in np.flatnonzero(now & start & ~cut).tolist() if (c % width, c // width) not in held]
@@ -249,8 +248,6 @@ def _random_move(now: np.ndarray, start: np.ndarray, held: set, width: int, heig
 
 
 def _goals_reachable(inst: Instance) -> bool:
-    from bille.heuristics.walking import UNREACHABLE, walk_for
-
     tiles = inst.start.tiles
     for i, (g, goal) in enumerate(zip(inst.world.graphs, inst.robot_goals)):
         walk = walk_for(g, tiles)

@@ -17,8 +17,8 @@ import numpy as np
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
-from bille.instances import PoseGraph
-from bille.instances.moveset import Kind
+from .posegraph import PoseGraph
+from .moveset import Kind
 
 UNREACHABLE = np.iinfo(np.int32).max // 2  # distance of poses that cannot reach the goal
 
@@ -170,3 +170,20 @@ def walk_for(graph: PoseGraph, tiles: np.ndarray, carrying: bool = False) -> Wal
     else:
         _CACHE.move_to_end(key)
     return walk
+
+
+def runnable(tiles: np.ndarray, cut: np.ndarray, pick: int, place: int, nbr, graph, w: int, h: int) -> bool:
+    """Whether the job can run now on ``tiles`` (``cut``: their articulation points, ``nbr``:
+    :func:`~bille.instances.grid.neighbour_table`): it keeps the tiles connected, and a robot of
+    ``graph`` can stand facing the pick and carry the tile to a pose facing the place."""
+    if cut[pick] or tiles[place] or tiles.sum() <= 1:
+        return False
+    rest = tiles.copy()
+    rest[pick] = False
+    if not any(n >= 0 and rest[n] for n in nbr[place]):
+        return False
+    pick_poses = walk_for(graph, tiles).facing_poses(pick)
+    carry = walk_for(graph, rest, carrying=True)
+    to_place = carry.facing_distances(place)
+    # the picking pose stands on the tiles that remain (a pose facing the pick never stands on it)
+    return bool(len(pick_poses)) and bool((to_place[pick_poses] < UNREACHABLE).any())

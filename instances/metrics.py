@@ -10,8 +10,8 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from bille.instances import Instance
-from bille.instances.moveset import Kind
+from .instance import Instance
+from .moveset import Kind
 
 
 @dataclass(frozen=True)

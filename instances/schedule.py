@@ -13,10 +13,10 @@ from typing import Any
 import numpy as np
 import yaml
 
-from bille.instances import Instance
-from bille.instances.errors import ScheduleError
-from bille.instances.instance import write_atomic
-from bille.instances.yamlsource import Source, expect_list, expect_mapping, load_yaml_file, load_yaml_text
+from .instance import Instance
+from .errors import ScheduleError
+from .instance import write_atomic
+from .yamlsource import Source, expect_list, expect_mapping, load_yaml_file, load_yaml_text
 
 
 @dataclass(frozen=True)
