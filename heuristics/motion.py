@@ -1,0 +1,124 @@
+"""Goals and motion, steps 3 and 5 of the reconfiguration loop (paper, Methods, "Temporal A*").
+
+Each robot is bound for the poses facing its next leg's cell when that pick or place could
+happen now, else for its goal cell, else it only keeps out of the way; the robots that do not
+manipulate this step then move with Temporal A* windows (:func:`.spacetime.reservation_step`)
+or a cached M* joint plan.
+"""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from bille.instances.walking import UNREACHABLE
+
+from .joint import JointProblem
+from .spacetime import reservation_step
+
+MSTAR_EXPANSIONS = 100_000  # per M* replan: a joint plan that needs more ends the run
+
+
+class Motion:
+    """The loop's goals and motion planners (a part of :class:`.reconfigure.Loop`)."""
+
+    def goal(self, i: int) -> np.ndarray | None:
+        """Robot ``i``'s distance table to its current goal poses, or None (free)."""
+        walk = self.walk(i)
+        if self.legs[i]:
+            if i not in self.ready():
+                return None  # its pick or place cannot happen yet: give way meanwhile
+            return walk.facing_distances(self.legs[i][0].cell)
+        if self.goal_cells[i] >= 0:
+            return walk.distances(self.goal_cells[i])
+        needed = self._pending_picks()
+        feet = self.world.graphs[i].feet
+        if needed.intersection(feet[self.state.poses[i]].tolist()):  # off the tiles still to be picked
+            def clear():
+                return np.flatnonzero(walk.standing & ~np.isin(feet, list(needed)).any(axis=1))
+
+            return walk.distances_to(("clear", frozenset(needed)), clear)
+        return None
+
+    def _as_lists(self, dist: np.ndarray | None):
+        if dist is None:
+            return None, None
+        key = id(dist)
+        got = self._lists.get(key)
+        if got is None or got[0] is not dist:
+            got = (dist, dist.tolist(), (dist == 0).tolist())
+            self._lists[key] = got
+            if len(self._lists) > 512:
+                self._lists.pop(next(iter(self._lists)))
+        return got[1], got[2]
+
+    # ---- 5. motion --------------------------------------------------------------------------
+
+    def _temporal(self, fixed: dict[int, int], goals: list, intents: dict[int, frozenset],
+                  cautious: bool = False) -> tuple[list[int] | None, int | None]:
+        """Temporal A* windows for the robots not in ``fixed``: ``(joint action, None)`` or
+        ``(None, blocked robot)``. The manipulating robots' cells are reserved for the whole
+        window; a robot with an intent waits, and the cells of its manipulation are reserved
+        from the second step on, so that the robot standing there must leave. ``cautious``: a
+        robot keeps off the lower-priority robots' cells for the whole window, not only the
+        first step (with no intents, then no robot is ever blocked: waiting is always left)."""
+        H, poses = self.horizon, self.state.poses
+        reserved: list[set[int]] = [set() for _ in range(H + 1)]
+        joint = [0] * len(poses)
+        for i, a in fixed.items():
+            cells = self.walk(i).cells(poses[i], a)
+            for t in range(1, H + 1):
+                reserved[t] |= cells
+            joint[i] = a
+        for i, cells in intents.items():
+            here = self._cells_now(i)
+            reserved[1] |= here
+            for t in range(2, H + 1):
+                reserved[t] |= here | cells
+            joint[i] = self.world.graphs[i].wait
+        order = [i for i in self.Q if i not in fixed and i not in intents]
+        walks = {i: self.walk(i) for i in order}
+        targets = {i: self._as_lists(goals[i]) for i in order}
+        first, blocked = reservation_step(order, walks, targets, poses, H, reserved, self._cells_now,
+                                          self.epsilon, self.stats, cautious)
+        if first is None:
+            return None, blocked
+        for i, a in first.items():
+            joint[i] = a
+        return joint, None
+
+    def _mstar(self, fixed: dict[int, int], goals: list) -> list[int] | None:
+        """The next joint action of the cached M* plan (planned again when the structure, the
+        goals or the poses left it); manipulations replace waits where they fit."""
+        from .mstar import joint_plan
+
+        poses = self.state.poses
+        key = (self.state.key(), tuple(id(g) for g in goals), tuple(fixed))
+        if self._joint_key != key or not self._joint:
+            walks = [self.walk(i) for i in range(len(poses))]
+            dists = [g if i not in fixed else walks[i].distances_to(("pose", poses[i]), lambda p=poses[i]: [p])
+                     for i, g in enumerate(goals)]
+            # a goal out of reach for now (the structure is changing) does not hold the others up
+            dists = [None if d is not None and d[p] >= UNREACHABLE else d for d, p in zip(dists, poses)]
+            problem = JointProblem.towards(self.instance, walks, dists, poses)
+            left = None if self.deadline is None else max(0.1, self.deadline - time.perf_counter())
+            status, steps, stats = joint_plan(problem, epsilon=self.epsilon, time_limit=left,
+                                              max_expansions=MSTAR_EXPANSIONS)
+            self.stats["replans"] += 1
+            self.stats["expanded"] += stats["expanded"]
+            if steps is None:
+                self.stats["mstar_status"] = status
+                return None
+            self._joint = list(steps) or [tuple(walks[i].wait for i in range(len(poses)))]
+        joint = list(self._joint.pop(0))
+        used: set[int] = set()
+        for i, a in enumerate(joint):
+            if i not in fixed:
+                used |= self.walk(i).cells(poses[i], a)
+        for i, a in fixed.items():
+            cells = self.walk(i).cells(poses[i], a)
+            if joint[i] == self.world.graphs[i].wait and cells.isdisjoint(used):
+                joint[i] = a
+            used |= self.walk(i).cells(poses[i], joint[i])
+        return joint
+
