@@ -37,9 +37,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from bille.instances import Instance
-from bille.instances.grid import HEADING_VECTORS, components, is_connected
 from bille.instances.moveset import Kind
 from bille.instances.distances import INF, Relaxed
+
+from .connectivity import eager_connectivity
 
 CONNECTIVITY = ("eager", "lazy")
 
@@ -148,7 +149,7 @@ class _Builder:
         self._dynamics()
         self._collisions()
         if self.opt.connectivity == "eager":
-            self._connectivity()
+            eager_connectivity(self)
         if min_done is not None:
             self._done(min_done)
         return self.m
@@ -181,7 +182,7 @@ class _Builder:
 
     def _candidate_cells(self) -> None:
         """Cells that may hold a tile at some time."""
-        inst, n = self.inst, self.world.width * self.world.height
+        inst = self.inst
         cand = inst.start.tiles | inst.goal_tiles  # with single_carry, all of them
         if self.opt.prune_cells and not self.opt.single_carry:
             for i, g in enumerate(self.world.graphs):
@@ -359,46 +360,6 @@ class _Builder:
                         m.clauses.append([-v, -was, occ] if conditional else [-v, occ])
                 m.at_most_one.append(group)
 
-    # ---- connectivity (rule 5), eager ---------------------------------------------------------
-
-    def _connectivity(self) -> None:
-        """Layered reachability from the first tile (in cell order) at every inner time point."""
-        m, W = self.m, self.world.width
-        cells = self.cells
-        layers = max(1, min(len(cells), int(self.inst.goal_tiles.sum())) - 1)
-        nbrs = {c: [c + dy * W + dx for dx, dy in HEADING_VECTORS
-                    if 0 <= c % W + dx < W and 0 <= c // W + dy < self.world.height and self.cand[c + dy * W + dx]]
-                for c in cells}
-        for t in range(1, self.T):
-            self.tick()
-            lits = [self.tile(t, c) for c in cells]
-            if all(abs(l) == m.true for l in lits):  # the tiles are known at t: check them here
-                mask = np.zeros(self.world.width * self.world.height, dtype=bool)
-                mask[[c for c, l in zip(cells, lits) if l == m.true]] = True
-                if not is_connected(mask, self.world.width, self.world.height):
-                    m.clauses.append([-m.true])
-                continue
-            none_before = m.true  # no tile in the cells before this one
-            reach_prev = {}
-            for c in cells:
-                tile = self.tile(t, c)
-                root = m.var(("root", t, c))
-                m.clauses += [[-root, tile], [-root, none_before], [-tile, -none_before, root]]
-                nb = m.var(("none_before", t, c))
-                m.clauses += [[-nb, none_before], [-nb, -tile], [-none_before, tile, nb]]
-                none_before = nb
-                reach_prev[c] = root
-            for k in range(1, layers + 1):
-                reach = {}
-                for c in cells:
-                    r = m.var(("reach", t, c, k))
-                    m.clauses.append([-r, reach_prev[c]] + [reach_prev[n] for n in nbrs[c]])
-                    m.clauses.append([-r, self.tile(t, c)])
-                    reach[c] = r
-                reach_prev = reach
-            for c in cells:
-                m.clauses.append([-self.tile(t, c), reach_prev[c]])
-
     def _done(self, min_done: int) -> None:
         m = self.m
         for k in range(max(0, min_done), self.T + 1):
@@ -432,38 +393,3 @@ def tiles_at(model: Model, instance: Instance, value) -> list[np.ndarray]:
                 mask[c] = True
         out.append(mask)
     return out
-
-
-def connectivity_cuts(model: Model, instance: Instance, masks: list[np.ndarray]) -> list[list[int]]:
-    """Clauses excluding the disconnected tile sets of a solution, at every inner time point.
-
-    For a component ``S`` of a disconnected step and a tile ``c'`` of another component: not
-    (all of ``S`` tiles, none of ``S``'s neighbour cells a tile, and ``c'`` a tile). True of every
-    connected tile set, false of this one.
-    """
-    W, H = instance.width, instance.height
-    cuts, seen = [], set()
-    for mask in masks:
-        labels, count = components(mask, W, H)
-        if count <= 1:
-            continue
-        comps = [np.flatnonzero(labels == k + 1).tolist() for k in range(count)]
-        for k, S in enumerate(comps):
-            other = comps[(k + 1) % count][0]
-            border = set()
-            for c in S:
-                for dx, dy in HEADING_VECTORS:
-                    x, y = c % W + dx, c // W + dy
-                    if 0 <= x < W and 0 <= y < H and not mask[y * W + x]:
-                        border.add(y * W + x)
-            key = (tuple(S), tuple(sorted(border)), other)
-            if key in seen:
-                continue
-            seen.add(key)
-            for t in range(1, model.T):
-                lits = [-model.tile[(t, c)] for c in S if (t, c) in model.tile]
-                lits += [model.tile[(t, c)] for c in border if (t, c) in model.tile]
-                if (t, other) in model.tile:
-                    lits.append(-model.tile[(t, other)])
-                cuts.append(lits)
-    return cuts

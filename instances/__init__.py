@@ -7,6 +7,7 @@ from .instance import (
     Task,
     check_instance,
     dump_instance,
+    instance_at,
     instance_from_text,
     load_instance,
     save_instance,
@@ -19,6 +20,6 @@ __all__ = [
     "Action", "BilleError", "Grid", "Instance", "InstanceError", "Kind", "Moveset", "MovesetError",
     "OptionError", "PoseGraph", "RULES", "Robot", "ScheduleError", "State", "Task", "Violation",
     "World", "apply", "articulation_points", "check_instance", "compile_posegraph", "dump_instance",
-    "goal_violation", "instance_from_text", "is_connected", "load_instance", "load_moveset",
+    "goal_violation", "instance_at", "instance_from_text", "is_connected", "load_instance", "load_moveset",
     "may_pick", "save_instance",
 ]

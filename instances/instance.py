@@ -21,6 +21,7 @@ import yaml
 from .errors import InstanceError, MovesetError
 from .grid import CELL_CHARS, Grid, detached_cells, is_connected
 from .moveset import Moveset, load_moveset
+from .files import write_atomic
 from .limits import check_size
 from .posegraph import compile_posegraph
 from .rules import State, World
@@ -336,6 +337,16 @@ def _grid(text, src: Source, key: str) -> Grid:
 # writing
 
 
+def instance_at(inst: Instance, st: State, name: str) -> Instance:
+    """The instance of reaching ``inst``'s goal from state ``st`` (tiles, poses, loads)."""
+    grid = Grid.from_masks(inst.width, inst.height, inst.start.obstacles, st.tiles)
+    robots = []
+    for i, r in enumerate(inst.robots):
+        feet = inst.world.graphs[i].feet_xy(st.poses[i])
+        robots.append(Robot(feet[0], feet[1] if len(feet) > 1 else None, bool(st.carrying[i]), r.moveset))
+    return Instance(name, inst.moveset, grid, tuple(robots), inst.goal_grid, inst.robot_goals)
+
+
 def dump_instance(inst: Instance) -> str:
     """The canonical YAML text of an instance (``load(dump(x)) == x``)."""
     out = [f"name: {_scalar(inst.name)}", f"moveset: {_scalar(inst.moveset.ref or inst.moveset.name)}"]
@@ -366,27 +377,6 @@ def dump_instance(inst: Instance) -> str:
 def save_instance(inst: Instance, path: str | Path) -> None:
     """Write an instance file atomically (a failed write leaves no partial file)."""
     write_atomic(path, dump_instance(inst), InstanceError)
-
-
-def write_atomic(path: str | Path, text: str, error: type[Exception]) -> None:
-    """Write ``text`` to ``path`` through a temporary file in the same folder, then rename."""
-    write_with(path, lambda tmp: tmp.write_text(text, encoding="utf-8"), error)
-
-
-def write_with(path: str | Path, write, error: type[Exception]) -> None:
-    """Call ``write(tmp)`` on a temporary path in the folder of ``path``, then rename it to
-    ``path``: a failure (an :class:`OSError` becomes ``error``) leaves no file behind."""
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.tmp")
-    try:
-        write(tmp)
-        tmp.replace(path)
-    except OSError as exc:
-        tmp.unlink(missing_ok=True)
-        raise error(f"{path}: cannot write ({exc.strerror})") from None
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
 
 
 def _block(key: str, grid: Grid) -> list[str]:

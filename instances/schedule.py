@@ -15,7 +15,7 @@ import yaml
 
 from .instance import Instance
 from .errors import ScheduleError
-from .instance import write_atomic
+from .files import write_atomic
 from .yamlsource import Source, expect_list, expect_mapping, load_yaml_file, load_yaml_text
 
 

@@ -27,7 +27,9 @@ import numpy as np
 
 from bille.encodings.cnf import SOLVERS, SatBackend
 from bille.encodings.cpsat import CpSatBackend
-from bille.encodings.model import CONNECTIVITY, Options, OutOfTime, build, connectivity_cuts, decode, tiles_at
+from bille.encodings.connectivity import connectivity_cuts
+from bille.encodings.model import CONNECTIVITY, Options, OutOfTime, build, decode, tiles_at
+from bille.heuristics import temporal_astar
 from bille.instances import Instance, OptionError
 from bille.instances.rules import goal_violation
 
@@ -132,10 +134,8 @@ class _Search:
         """A first schedule from Temporal A* (path planning only); its makespan caps the search."""
         if self.instance.is_reconfiguration:
             return
-        from bille.heuristics.temporal_astar import plan
-
         budget = 5.0 if self.deadline is None else min(5.0, 0.1 * (self.deadline - time.perf_counter()))
-        found = plan(self.instance, time_limit=max(budget, 0.01))
+        found = temporal_astar.plan(self.instance, time_limit=max(budget, 0.01))
         if found.schedule is None:
             return
         ids = bind(self.instance, found.schedule)

@@ -72,7 +72,7 @@ def table(rows: list[dict]) -> list[str]:
 
 
 def write_csv(rows: list[dict], path: Path) -> None:
-    from bille.instances.instance import write_atomic
+    from bille.instances.files import write_atomic
     import io
 
     buf = io.StringIO()

@@ -208,7 +208,7 @@ def gen_graph(graph_file, vertices, seed, output, as_json) -> int:
     """Read GRAPH (a drawing with 'o' or lines 'x y') or make a random grid graph, and decide
     whether it has a Hamiltonian path."""
     from bille.instances.generators.graphs import draw_graph, hamiltonian_path
-    from bille.instances.instance import write_atomic
+    from bille.instances.files import write_atomic
 
     g = _graph(graph_file, vertices, seed)
     path = hamiltonian_path(g)

@@ -25,7 +25,7 @@ from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.patches import Circle, Patch, Rectangle  # noqa: E402
 
 from bille.instances import BilleError, OptionError  # noqa: E402
-from bille.instances.instance import write_with  # noqa: E402
+from bille.instances.files import write_with  # noqa: E402
 
 from . import style  # noqa: E402
 from .trace import Trace  # noqa: E402

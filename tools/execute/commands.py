@@ -11,7 +11,8 @@ from pathlib import Path
 
 import click
 
-from .executor import POLICIES, dumps, summary_lines
+from .executor import POLICIES
+from .outcome import dumps, summary_lines
 from .protocol import ExecutionError
 
 EXIT_OK, EXIT_NO = 0, 1

@@ -19,7 +19,8 @@ from bille.instances import Instance
 from bille.solvers import bind, validate
 
 from .broker import BrokerURL, EmbeddedBroker, parse_url
-from .executor import Outcome, Settings, load_secrets, run_plan
+from .executor import Settings, load_secrets, run_plan
+from .outcome import Outcome
 from .journal import Journal, Replayed, replay, sha256_file
 from .protocol import ExecutionError
 

@@ -169,7 +169,7 @@ def crowd_instance(size: int, robots: int, seed: int):
     from bille.instances.walking import UNREACHABLE, walk_for
     from bille.instances import Grid, Instance, Robot, check_instance, load_moveset
 
-    from .bench_core import holey_square
+    from .core import holey_square
 
     rnd = random.Random(seed)
     n = size * size

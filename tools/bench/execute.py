@@ -18,8 +18,8 @@ import numpy as np
 from bille.instances import Grid, Instance, Robot, load_moveset, save_instance
 from bille.solvers import Schedule, save_schedule
 
-from .execute import session
-from .execute.executor import Outcome
+from ..execute import session
+from ..execute.outcome import Outcome
 
 
 def pacing(robots: int, steps: int) -> tuple[Instance, Schedule]:

@@ -12,10 +12,10 @@ from pathlib import Path
 
 from bille.solvers import validate
 
-from .bench_core import walk_instance
-from .pictures import save_png
-from .recording import read, record
-from .trace import trace
+from .core import walk_instance
+from ..pictures import save_png
+from ..recording import read, record
+from ..trace import trace
 
 
 def report(size: int = 64, robots: int = 20, steps: int = 1000, seed: int = 0) -> list[str]:

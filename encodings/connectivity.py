@@ -1,0 +1,86 @@
+"""Connectivity of the tiles (DESIGN §3 rule 5) in the time-expanded model: the eager encoding
+(layered reachability from the first tile) and the lazy one (cuts added when a solution breaks it).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from bille.instances import Instance
+from bille.instances.grid import HEADING_VECTORS, components, is_connected
+
+
+def eager_connectivity(builder) -> None:
+    """Layered reachability from the first tile (in cell order) at every inner time point, added
+    to the model of the ``builder`` (:class:`.model._Builder`): ``root``, ``none_before``
+    and ``reach`` variables, unary distance labels of at most ``|goal tiles| - 1`` layers (no
+    more tiles exist at any time, so every tile of a connected set is that close to the root)."""
+    m, W = builder.m, builder.world.width
+    cells = builder.cells
+    layers = max(1, min(len(cells), int(builder.inst.goal_tiles.sum())) - 1)
+    nbrs = {c: [c + dy * W + dx for dx, dy in HEADING_VECTORS
+                if 0 <= c % W + dx < W and 0 <= c // W + dy < builder.world.height and builder.cand[c + dy * W + dx]]
+            for c in cells}
+    for t in range(1, builder.T):
+        builder.tick()
+        lits = [builder.tile(t, c) for c in cells]
+        if all(abs(l) == m.true for l in lits):  # the tiles are known at t: check them here
+            mask = np.zeros(builder.world.width * builder.world.height, dtype=bool)
+            mask[[c for c, l in zip(cells, lits) if l == m.true]] = True
+            if not is_connected(mask, builder.world.width, builder.world.height):
+                m.clauses.append([-m.true])
+            continue
+        none_before = m.true  # no tile in the cells before this one
+        reach_prev = {}
+        for c in cells:
+            tile = builder.tile(t, c)
+            root = m.var(("root", t, c))
+            m.clauses += [[-root, tile], [-root, none_before], [-tile, -none_before, root]]
+            nb = m.var(("none_before", t, c))
+            m.clauses += [[-nb, none_before], [-nb, -tile], [-none_before, tile, nb]]
+            none_before = nb
+            reach_prev[c] = root
+        for k in range(1, layers + 1):
+            reach = {}
+            for c in cells:
+                r = m.var(("reach", t, c, k))
+                m.clauses.append([-r, reach_prev[c]] + [reach_prev[n] for n in nbrs[c]])
+                m.clauses.append([-r, builder.tile(t, c)])
+                reach[c] = r
+            reach_prev = reach
+        for c in cells:
+            m.clauses.append([-builder.tile(t, c), reach_prev[c]])
+
+
+def connectivity_cuts(model, instance: Instance, masks: list[np.ndarray]) -> list[list[int]]:
+    """Clauses excluding the disconnected tile sets of a solution, at every inner time point.
+
+    For a component ``S`` of a disconnected step and a tile ``c'`` of another component: not
+    (all of ``S`` tiles, none of ``S``'s neighbour cells a tile, and ``c'`` a tile). True of every
+    connected tile set, false of this one.
+    """
+    W, H = instance.width, instance.height
+    cuts, seen = [], set()
+    for mask in masks:
+        labels, count = components(mask, W, H)
+        if count <= 1:
+            continue
+        comps = [np.flatnonzero(labels == k + 1).tolist() for k in range(count)]
+        for k, S in enumerate(comps):
+            other = comps[(k + 1) % count][0]
+            border = set()
+            for c in S:
+                for dx, dy in HEADING_VECTORS:
+                    x, y = c % W + dx, c // W + dy
+                    if 0 <= x < W and 0 <= y < H and not mask[y * W + x]:
+                        border.add(y * W + x)
+            key = (tuple(S), tuple(sorted(border)), other)
+            if key in seen:
+                continue
+            seen.add(key)
+            for t in range(1, model.T):
+                lits = [-model.tile[(t, c)] for c in S if (t, c) in model.tile]
+                lits += [model.tile[(t, c)] for c in border if (t, c) in model.tile]
+                if (t, other) in model.tile:
+                    lits.append(-model.tile[(t, other)])
+                cuts.append(lits)
+    return cuts

@@ -1,0 +1,167 @@
+"""``bille bench``: benchmarks that print figures measured on this machine, with ratios to
+baselines of the same run."""
+from __future__ import annotations
+
+import click
+
+from bille.instances.bundled import bundled_path
+
+from ..common import EXIT_OK, instance_arg, output_folder
+
+
+@click.group()
+def bench() -> None:
+    """Benchmarks: figures measured on this machine, with ratios to baselines of the same run."""
+
+
+@bench.command("core")
+@click.option("--size", type=click.IntRange(8, 512), default=64, show_default=True, help="Structure side for validation.")
+@click.option("--robots", type=click.IntRange(1, 200), default=20, show_default=True)
+@click.option("--steps", type=click.IntRange(1, 100_000), default=1000, show_default=True)
+@click.option("--compile-size", type=click.IntRange(8, 1024), default=128, show_default=True, help="Structure side for compiling.")
+@click.option("--seed", type=int, default=0, show_default=True)
+def bench_core(size: int, robots: int, steps: int, compile_size: int, seed: int) -> int:
+    """Time the validator on a long random schedule and the pose-table compiler."""
+    from .core import report
+
+    for line in report(size, robots, steps, compile_size, seed):
+        click.echo(line)
+    return EXIT_OK
+
+
+@bench.command("execute")
+@click.option("--robots", "sizes", default="10,50", show_default=True, help="Comma-separated fleet sizes (1 is the baseline).")
+@click.option("--steps", type=click.IntRange(2, 100_000), default=200, show_default=True)
+@click.option("--broker", metavar="URL", help="mqtt://host:port (default: the embedded broker).")
+def bench_execute(sizes: str, steps: int, broker: str | None) -> int:
+    """Steps per second and round-trip latency of the execution layer with simulated robots."""
+    from .execute import report
+    from ..execute.broker import parse_url
+
+    try:
+        counts = sorted({int(s) for s in sizes.split(",") if s.strip()})
+    except ValueError:
+        raise click.BadParameter(f"{sizes!r}: expected numbers like 10,50", param_hint="--robots") from None
+    if not counts or counts[0] < 1:
+        raise click.BadParameter(f"{sizes!r}: fleet sizes must be at least 1", param_hint="--robots")
+    if broker:
+        parse_url(broker)
+    for line in report(counts, steps, broker):
+        click.echo(line)
+    return EXIT_OK
+
+
+@bench.command("planners")
+@click.option("--time-limit", type=click.FloatRange(min=0.1), default=60.0, show_default=True, help="Seconds per run.")
+@click.option("--jobs", "-j", type=click.IntRange(min=1), default=None, help="Parallel processes (default: CPUs).")
+@click.option("--maps", default=",".join(f"compare-{m}" for m in range(2, 7)), show_default=True,
+              help="Comma-separated bundled maps.")
+@click.option("--movesets", default="S5,S7", show_default=True)
+@click.option("--out", type=click.Path(file_okay=False), default="bench-out", show_default=True,
+              help="Folder for planners.csv and planners.png.")
+def bench_planners(time_limit: float, jobs: int | None, maps: str, movesets: str, out: str) -> int:
+    """The paper's planner comparison: A*, M*, Temporal A* on the comparison maps."""
+    from .planners import default_jobs, plot, run_grid, tables, write_csv
+
+    names = [m.strip() for m in maps.split(",") if m.strip()]
+    for name in names:
+        bundled_path(name)  # unknown names fail here, before any work
+    sets = [m.strip() for m in movesets.split(",") if m.strip()]
+    for ms in sets:
+        if ms not in ("S5", "S7", "point"):
+            raise click.BadParameter(f"unknown moveset {ms!r}", param_hint="--movesets")
+    folder = output_folder(out)
+    rows = run_grid(time_limit, jobs or default_jobs(), names, sets)
+    for line in tables(rows, time_limit):
+        click.echo(line)
+    write_csv(rows, folder / "planners.csv")
+    plot(rows, time_limit, folder / "planners.png")
+    click.echo(f"wrote {folder / 'planners.csv'} and {folder / 'planners.png'}")
+    return EXIT_OK
+
+
+@bench.command("exact")
+@click.option("--time-limit", type=click.FloatRange(min=1), default=120.0, show_default=True, help="Seconds per run.")
+@click.option("--threads", type=click.IntRange(min=1), default=2, show_default=True, help="CP-SAT workers.")
+@click.option("--only", type=click.Choice(["optimum", "connectivity", "pruning", "presolve"]), multiple=True,
+              help="Run only these sections (repeatable).")
+def bench_exact(time_limit: float, threads: int, only) -> int:
+    """Exact solvers: time to optimum per map, eager vs lazy connectivity, pruning, presolve."""
+    from .exact import report
+
+    report(time_limit, threads, only or ("optimum", "connectivity", "pruning", "presolve"), echo=click.echo)
+    return EXIT_OK
+
+
+@bench.command("hampath")
+@click.option("--size", type=click.IntRange(2, 40), default=10, show_default=True, help="Largest grid graph side.")
+@click.option("--scale", "-s", type=click.IntRange(min=1), default=1, show_default=True)
+@click.option("--robots", "-m", type=click.IntRange(min=1), default=1, show_default=True)
+def bench_hampath(size: int, scale: int, robots: int) -> int:
+    """Time and size of Theorem 1's instance for k x k grid graphs up to SIZE."""
+    from .gen import report
+
+    for line in report(size, scale, robots):
+        click.echo(line, nl=True)
+    return EXIT_OK
+
+
+@bench.command("view")
+@click.option("--size", type=click.IntRange(8, 512), default=64, show_default=True)
+@click.option("--robots", type=click.IntRange(1, 200), default=20, show_default=True)
+@click.option("--steps", type=click.IntRange(1, 100_000), default=1000, show_default=True)
+@click.option("--seed", type=int, default=0, show_default=True)
+def bench_view(size: int, robots: int, steps: int, seed: int) -> int:
+    """Time and size of a rerun recording and a picture of a long schedule."""
+    from .view import report
+
+    for line in report(size, robots, steps, seed):
+        click.echo(line)
+    return EXIT_OK
+
+
+@bench.command("load-transfer")
+@click.option("--maps", default=",".join(f"lt-{k}" for k in range(1, 9)), show_default=True,
+              help="Comma-separated bundled maps or instance files.")
+@click.option("--horizon", "-H", type=click.IntRange(min=1), default=10, show_default=True)
+@click.option("--d-tr", type=click.IntRange(min=0), default=5, show_default=True)
+@click.option("--time-limit", type=click.FloatRange(min=0.1), default=120.0, show_default=True, help="Seconds per run.")
+@click.option("--random", "random_runs", type=click.IntRange(min=0), default=0, show_default=True,
+              help="Also run this many random reconfiguration instances per size (10-50 tiles moved, 2-10 robots).")
+@click.option("--exact-limit", type=click.FloatRange(min=0), default=0.0, show_default=True,
+              help="Seconds of CP-SAT per random instance for the gap to the optimum (0: skip).")
+@click.option("--out", type=click.Path(file_okay=False), default="bench-out", show_default=True,
+              help="Folder for load-transfer.csv and load-transfer.png.")
+def bench_load_transfer(maps: str, horizon: int, d_tr: int, time_limit: float, random_runs: int, exact_limit: float,
+                        out: str) -> int:
+    """The paper's load-transfer experiment: each map with and without load transfer (Temporal A*,
+    epsilon 1), the percentage decrease in time steps and tiles traveled, and a bar plot."""
+    from .transfer import plot, random_report, run_maps, table, write_csv
+
+    names = [m.strip() for m in maps.split(",") if m.strip()]
+    instances = [instance_arg(name) for name in names]  # unknown names fail here, before any work
+    folder = output_folder(out)
+    rows = run_maps(instances, horizon, d_tr, time_limit)
+    for line in table(rows):
+        click.echo(line)
+    write_csv(rows, folder / "load-transfer.csv")
+    plot(rows, folder / "load-transfer.png")
+    click.echo(f"wrote {folder / 'load-transfer.csv'} and {folder / 'load-transfer.png'}")
+    if random_runs:
+        for line in random_report(random_runs, horizon, d_tr, time_limit, exact_limit):
+            click.echo(line)  # one line per size as soon as it is measured
+    return EXIT_OK
+
+
+@bench.command("crowd")
+@click.option("--size", type=click.IntRange(8, 512), default=64, show_default=True)
+@click.option("--robots", type=click.IntRange(1, 1000), default=50, show_default=True)
+@click.option("--horizon", "-H", type=click.IntRange(min=1), default=5, show_default=True)
+@click.option("--seed", type=int, default=0, show_default=True)
+def bench_crowd(size: int, robots: int, horizon: int, seed: int) -> int:
+    """Temporal A* with many robots: mean replanning time per step."""
+    from .planners import bench_crowd as run
+
+    for line in run(size, robots, horizon, seed):
+        click.echo(line)
+    return EXIT_OK

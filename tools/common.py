@@ -1,0 +1,95 @@
+"""What the commands share: loading arguments, output checks, JSON, recordings, exit codes."""
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import click
+
+from bille.instances import BilleError, InstanceError, ScheduleError, load_instance
+from bille.instances.bundled import resolve
+from bille.solvers import load_schedule
+
+EXIT_OK, EXIT_NO, EXIT_USAGE = 0, 1, 2
+
+
+def instance_arg(arg: str, *, check: bool = True):
+    """An instance from a file or a bundled name."""
+    return load_instance(resolve(arg, InstanceError), check=check)
+
+
+def schedule_arg(arg: str):
+    """A schedule from a file or a bundled name."""
+    return load_schedule(resolve(arg, ScheduleError))
+
+
+def print_json(obj) -> None:
+    click.echo(json.dumps(obj))
+
+
+
+def stderr_console():
+    from rich.console import Console
+
+    return Console(stderr=True)
+
+
+def writable(*paths) -> None:
+    """Fail before any work when an output file cannot be created (a missing folder, a folder
+    in its place, no permission)."""
+    for p in paths:
+        if not p:
+            continue
+        path = Path(p)
+        folder = path.parent if str(path.parent) else Path(".")
+        if path.is_dir():
+            raise BilleError(f"{path}: cannot write (a folder of that name exists)")
+        if not folder.is_dir():
+            raise BilleError(f"{path}: cannot write (no folder {folder})")
+        if not os.access(folder, os.W_OK) or (path.exists() and not os.access(path, os.W_OK)):
+            raise BilleError(f"{path}: cannot write (permission denied)")
+
+
+def label_of(arg: str) -> str:
+    name = Path(arg).name
+    for suffix in (".yaml", ".yml"):
+        name = name.removesuffix(suffix)
+    return name
+
+
+def unique(names: list[str]) -> list[str]:
+    seen: dict[str, int] = {}
+    out = []
+    for n in names:
+        seen[n] = seen.get(n, 0) + 1
+        out.append(n if seen[n] == 1 else f"{n}-{seen[n]}")
+    return out
+
+
+def trace_of(inst, schedule, label: str):
+    from .recording import entity_label
+    from .trace import trace
+
+    return trace(inst, schedule, entity_label(label))
+
+
+def record_traces(traces, path, *, spawn: bool = False, quiet: bool = False) -> None:
+    from .recording import record
+
+    info = record(traces, path, spawn=spawn)
+    if info["viewer"]:
+        click.echo(f"bille: note: the viewer was not opened: {info['viewer']}", err=True)
+    if path and not quiet:
+        click.echo(f"recording written to {path} (steps 0..{info['frames'] - 1}, {info['bytes'] / 1e3:.0f} kB)")
+
+
+
+def output_folder(out: str) -> Path:
+    """The folder ``out``, created if needed; one clear error if it cannot be."""
+    folder = Path(out)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise BilleError(f"{folder}: cannot create the output folder ({exc.strerror})") from None
+    return folder

@@ -1,0 +1,164 @@
+"""Commands that solve: ``solve`` one instance, ``plan-sequence``, and the ``gap`` report."""
+from __future__ import annotations
+
+import click
+import yaml
+
+from bille.solvers import METHODS, save_schedule, solve
+
+from .common import EXIT_NO, EXIT_OK, instance_arg, print_json, record_traces, trace_of, writable
+
+
+@click.command("solve")
+@click.argument("instance")
+@click.option("--method", "-m", type=click.Choice(list(METHODS)), default="temporal-astar", show_default=True)
+@click.option("--epsilon", type=click.FloatRange(min=1.0), help="Heuristic weight (astar, mstar, temporal-astar).")
+@click.option("--horizon", "-H", type=click.IntRange(min=1), help="Steps planned ahead (temporal-astar).")
+@click.option("--time-limit", type=float, help="Seconds before giving up.")
+@click.option("--threads", type=click.IntRange(min=1), help="Solver workers (cpsat).")
+@click.option("--load-transfer", is_flag=True, default=None,
+              help="Reconfiguration (temporal-astar, mstar): robots exchange loads (paper, equations 1-3).")
+@click.option("--d-tr", type=click.IntRange(min=0), help="Manhattan distance within which robots consider a load transfer.")
+@click.option("-O", "--option", "extra", multiple=True, metavar="NAME=VALUE",
+              help="Another option of the method, e.g. -O od=false or -O max_steps=200.")
+@click.option("-o", "--output", type=click.Path(dir_okay=False), help="Write the schedule here.")
+@click.option("--rerun", "rrd", type=click.Path(dir_okay=False), metavar="OUT.rrd",
+              help="Write a rerun recording of the schedule found.")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of text.")
+def solve_(instance: str, method: str, epsilon, horizon, time_limit, threads, load_transfer, d_tr, extra, output, rrd,
+           as_json) -> int:
+    """Solve INSTANCE with METHOD; print the status and metrics (exit 1 if no schedule).
+
+    On an instance that moves tiles, temporal-astar and mstar run the reconfiguration loop: the
+    instance's tasks (or a derived sequence) are handed to the robots and carried out."""
+    if time_limit is not None and time_limit <= 0:
+        raise click.BadParameter("must be positive", param_hint="--time-limit")
+    writable(output, rrd)
+    given = dict(epsilon=epsilon, horizon=horizon, time_limit=time_limit, threads=threads,
+                 load_transfer=load_transfer, d_tr=d_tr)
+    options = {k: v for k, v in given.items() if v is not None}
+    options.update(_parse_options(extra))
+    inst = instance_arg(instance)
+    result = solve(inst, method, **options)
+    if output and result.schedule is not None:
+        save_schedule(result.schedule, output)
+    if rrd:  # without a schedule the recording shows the instance
+        record_traces([trace_of(inst, result.schedule, method)], rrd, quiet=as_json)
+    if as_json:
+        print_json(result.to_json())
+        return EXIT_OK if result.schedule is not None else EXIT_NO
+    m = result.metrics
+    text = f"{method}: {result.status} in {result.time_s:.3f} s"
+    if m is not None:
+        text += f"; makespan {m.makespan}, tiles traveled {m.tiles_traveled}, waits {m.waits}"
+    if result.lower_bound is not None:
+        text += f"; makespan lower bound {result.lower_bound}"
+    click.echo(text)
+    for key in ("unreachable", "failure", "violation"):
+        if key in result.stats:
+            click.echo(f"{key}: {_explain(inst, key, result.stats[key])}")
+    if result.stats.get("load_transfer"):
+        click.echo(f"load transfers: {result.stats['relays']} relays, {result.stats['swaps']} swaps "
+                   f"({result.stats['pairs_considered']} robot pairs within d_tr considered)")
+    if output and result.schedule is not None:
+        click.echo(f"schedule written to {output}")
+    return EXIT_OK if result.schedule is not None else EXIT_NO
+
+
+@click.command("plan-sequence")
+@click.argument("instance")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of text.")
+def plan_sequence(instance: str, as_json: bool) -> int:
+    """Print the reconfiguration sequence of INSTANCE: its tasks (checked), or one derived so
+    that running it one task at a time keeps the structure connected."""
+    from bille.heuristics.sequence import NoSequence, sequence_of
+
+    inst = instance_arg(instance)
+    try:
+        jobs = sequence_of(inst)
+    except NoSequence as exc:
+        click.echo(f"{inst.name}: {exc}", err=True)
+        return EXIT_NO
+    source = "given" if inst.tasks is not None else "derived"
+    xy = inst.world.xy
+    rows = [{"pick": None if j.pick is None else list(xy(j.pick)), "place": list(xy(j.place)),
+             **({"carrier": j.carrier} if j.pick is None else {})} for j in jobs]
+    if as_json:
+        print_json({"instance": inst.name, "source": source, "tasks": rows})
+        return EXIT_OK
+    click.echo(f"{inst.name}: {len(jobs)} tasks ({source}); each keeps the structure connected when run in order")
+    click.echo("tasks:")
+    for j in jobs:
+        if j.pick is None:
+            click.echo(f"  - {{place: {list(xy(j.place))}}}  # the tile robot {j.carrier} carries at the start")
+        else:
+            click.echo(f"  - {{pick: {list(xy(j.pick))}, place: {list(xy(j.place))}}}")
+    return EXIT_OK
+
+
+def _parse_options(items) -> dict:
+    out = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        if not sep or not name:
+            raise click.BadParameter(f"expected NAME=VALUE, got {item!r}", param_hint="-O/--option")
+        try:
+            out[name.replace("-", "_")] = yaml.safe_load(value)
+        except yaml.YAMLError:
+            raise click.BadParameter(f"cannot read the value of {item!r}", param_hint="-O/--option") from None
+    return out
+
+
+def _explain(inst, key: str, value) -> str:
+    if key == "unreachable":
+        return "; ".join(f"robot {i} cannot reach its goal {inst.robot_goals[i]} even alone" for i in value)
+    return str(value)
+
+
+@click.command()
+@click.argument("instances", nargs=-1)
+@click.option("--methods", default=",".join(("temporal-astar", "mstar", "astar", "cpsat", "sat")), show_default=True,
+              help="Comma-separated methods.")
+@click.option("--time-limit", type=click.FloatRange(min=0, min_open=True), default=60.0, show_default=True,
+              help="Seconds per method and instance.")
+@click.option("--threads", type=click.IntRange(min=1), default=2, show_default=True, help="CP-SAT workers.")
+@click.option("--csv", "csv_path", type=click.Path(dir_okay=False), default="gap.csv", show_default=True,
+              help="Where to write the table as CSV.")
+@click.option("--rerun", "rrd", type=click.Path(dir_okay=False), metavar="OUT.rrd",
+              help="Write every schedule found to one rerun recording, side by side per instance.")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of the table.")
+def gap(instances, methods: str, time_limit: float, threads: int, csv_path: str, rrd: str | None, as_json: bool) -> int:
+    """How far the heuristics are from the exact optimum: one table over INSTANCES (default:
+    the bundled point-4), with each method's makespan gap to the proved optimum."""
+    from pathlib import Path
+
+    from .gap import run, table, write_csv
+
+    names = [m.strip() for m in methods.split(",") if m.strip()]
+    if not names:
+        raise click.BadParameter(f"no method named in {methods!r}", param_hint="--methods")
+    for name in names:
+        if name not in METHODS:
+            raise click.BadParameter(f"unknown method {name!r} (expected: {', '.join(METHODS)})", param_hint="--methods")
+    writable(csv_path, rrd)
+    loaded = [instance_arg(arg) for arg in (instances or ("point-4",))]
+
+    def progress(inst, method):
+        if not as_json:
+            click.echo(f"  running {method} on {inst} ...", err=True)
+
+    schedules: dict = {}
+    rows = run(loaded, names, time_limit, threads, progress, schedules=schedules)
+    write_csv(rows, Path(csv_path))
+    if rrd:
+        by_name = {inst.name: inst for inst in loaded}
+        traces = [trace_of(by_name[name], sched, f"{name}/{method}") for (name, method), sched in schedules.items()]
+        if traces:
+            record_traces(traces, rrd, quiet=as_json)
+    if as_json:
+        print_json({"rows": rows, "csv": csv_path})
+    else:
+        for line in table(rows):
+            click.echo(line)
+        click.echo(f"written to {csv_path}")
+    return EXIT_OK
