@@ -35,7 +35,7 @@ def plan(instance: Instance, *, epsilon: float = 1.0, time_limit: float | None =
         raise OptionError(f"astar: epsilon must be >= 1, got {epsilon}")
     start_time = time.perf_counter()
     deadline = None if time_limit is None else start_time + time_limit
-    problem = JointProblem.of(instance)
+    problem = JointProblem.of(instance, "astar")
     stats = {"objective": OBJECTIVE, "epsilon": epsilon, "expanded": 0, "generated": 0}
     if problem.unreachable():
         stats["unreachable"] = problem.unreachable()

@@ -15,6 +15,7 @@ from typing import Iterator
 import numpy as np
 
 from bille.instances import Instance, OptionError
+from bille.instances.limits import human, memory_budget
 from bille.instances.result import Result
 from bille.instances.schedule import Schedule
 
@@ -47,8 +48,9 @@ class JointProblem:
                                for w, c in zip(self.walks, self.goals)]
 
     @classmethod
-    def of(cls, instance: Instance) -> "JointProblem":
-        require_path_planning(instance)
+    def of(cls, instance: Instance, method: str = "astar") -> "JointProblem":
+        require_path_planning(instance, method)
+        check_tables(instance, method)
         tiles = instance.start.tiles
         walks = [walk_for(g, tiles) for g in instance.world.graphs]
         goals = instance.goal_cells
@@ -127,6 +129,23 @@ class JointProblem:
 
 
 NO_WALK = "no walking schedule on the fixed structure (a schedule that moves tiles may exist)"
+
+
+def table_bytes(instance: Instance) -> int:
+    """Bytes of the robots' distance tables: per robot and pose an int32, a list entry of an int
+    and one of a flag (the inner loops read lists)."""
+    return 40 * sum(g.num_poses for g in instance.world.graphs)
+
+
+def check_tables(instance: Instance, method: str) -> None:
+    """Refuse, before allocating, a problem whose per-robot distance tables (a numpy table and
+    two plain lists per robot, for the inner loops) would not fit in memory."""
+    need = table_bytes(instance)
+    budget = memory_budget()
+    if need > budget:
+        raise OptionError(f"{method}: {instance.num_robots} robots on a {instance.width}x{instance.height} grid need "
+                          f"about {human(need)} of distance tables, more than the {human(budget)} "
+                          "this machine allows (BILLE_MEMORY_GIB sets it)")
 
 
 def require_path_planning(instance: Instance, method: str = "astar") -> None:

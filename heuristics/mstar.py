@@ -48,7 +48,7 @@ def plan(instance: Instance, *, epsilon: float = 1.0, od: bool = True, time_limi
     """
     if epsilon < 1:
         raise OptionError(f"mstar: epsilon must be >= 1, got {epsilon}")
-    return _MStar(JointProblem.of(instance), epsilon, od, time_limit, max_expansions).run()
+    return _MStar(JointProblem.of(instance, "mstar"), epsilon, od, time_limit, max_expansions).run()
 
 
 def joint_plan(problem: JointProblem, *, epsilon: float = 1.0, od: bool = True, time_limit: float | None = None,

@@ -57,7 +57,7 @@ def plan(instance: Instance, *, epsilon: float = 1.0, horizon: int = 5, time_lim
         raise OptionError(f"temporal-astar: priorities must order the robot ids 0..{m - 1}, got {priorities}")
     start_time = time.perf_counter()
     deadline = None if time_limit is None else start_time + time_limit
-    problem = JointProblem.of(instance)
+    problem = JointProblem.of(instance, "temporal-astar")
     stats = {"horizon": horizon, "epsilon": epsilon, "steps": 0, "priority_shifts": 0, "replans": 0,
              "expanded": 0, "plan_ms_mean": 0.0, "plan_ms_max": 0.0}
     if problem.unreachable():

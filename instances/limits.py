@@ -17,6 +17,11 @@ from .moveset import Moveset
 GIB = 1 << 30
 
 
+def human(size: float) -> str:
+    """Bytes as GiB, or MiB below one GiB."""
+    return f"{size / GIB:.1f} GiB" if size >= GIB else f"{size / (1 << 20):.1f} MiB"
+
+
 def memory_budget() -> int:
     """Bytes that one instance's tables may take (module docstring)."""
     env = os.environ.get("BILLE_MEMORY_GIB")
@@ -52,5 +57,5 @@ def check_size(movesets, width: int, height: int, what: str = "the instance",
     need = sum(table_bytes(ms, width, height) for ms in {m.name: m for m in movesets}.values())
     budget = memory_budget()
     if need > budget:
-        raise error(f"{what}: a {width}x{height} grid needs about {need / GIB:.1f} GiB for its pose tables, "
-                    f"more than the {budget / GIB:.1f} GiB this machine allows (BILLE_MEMORY_GIB sets it)")
+        raise error(f"{what}: a {width}x{height} grid needs about {human(need)} for its pose tables, "
+                    f"more than the {human(budget)} this machine allows (BILLE_MEMORY_GIB sets it)")

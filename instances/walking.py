@@ -58,7 +58,7 @@ class Walk:
         first. Cached per pose: the planners' inner loops read Python tuples, not numpy rows."""
         out = self._moves.get(pose)
         if out is None:
-            g, row = self.graph, self.succ[pose]
+            row = self.succ[pose]
             order = [self.wait] + [a for a in range(len(row)) if a != self.wait]
             out = [(a, int(row[a]), self.cells(pose, a)) for a in order if row[a] >= 0]
             self._moves[pose] = out

@@ -63,7 +63,7 @@ from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
 from bille.instances import Instance, PoseGraph
-from bille.instances.distances import INF, Relaxed, facing, manipulates_ahead
+from bille.instances.distances import INF, Relaxed, manipulates_ahead
 from bille.instances.moveset import Kind
 
 # the weight of a pick or place edge in the transport graph: small enough that any number of

@@ -14,6 +14,7 @@ def test_point_robot_walks_the_shortest_route():
     assert validate(inst, result.schedule).valid
 
 
+@pytest.mark.slow
 def test_two_robots_must_take_turns_in_a_corridor():
     # both want to cross the single cell (2, 0); the optimum makes one wait or detour
     inst = make("TTTTT\n..T..", [{"at": [0, 0]}, {"at": [4, 0]}], moveset="point", robot_goals=[[4, 0], [0, 0]])

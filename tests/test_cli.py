@@ -105,6 +105,7 @@ def test_the_installed_console_script(tmp_path):
     assert bad.stderr.strip() == f"bille: error: {DATA / 'ragged.instance.yaml'}:3: grid: row 1 has 2 cells, expected 3 like row 0 (the grid must be a rectangle)"
 
 
+@pytest.mark.slow
 def test_gap_reports_the_heuristics_against_the_optimum(tmp_path, capsys):
     out_csv = tmp_path / "gap.csv"
     code, out, _ = run(capsys, "gap", "compare-2", "corridor-2", "--methods", "temporal-astar,cpsat",

@@ -55,6 +55,7 @@ def test_the_gadget_has_the_papers_tasks():
     assert [r.front for r in inst.robots] == [(large[0], large[1] + 1), (target[0], target[1] + 1)]
 
 
+@pytest.mark.slow
 def test_splitting_the_large_task_beats_every_schedule_that_carries_each_tile_once():
     """The best schedule that carries every tile once, straight to its goal, takes NO_SPLIT
     steps (CP-SAT proves none within NO_SPLIT - 1); the demonstration, which sets the large

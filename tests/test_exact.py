@@ -39,7 +39,8 @@ def optimum():
     return get
 
 
-@pytest.mark.parametrize("name", TINY)
+@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n in ("handover", "point-pass") else n
+                                  for n in TINY])
 @pytest.mark.parametrize("method", ["cpsat", "sat"])
 @pytest.mark.parametrize("connectivity", ["lazy", "eager"])
 def test_exact_makespan_equals_breadth_first_search(name, method, connectivity, optimum):
@@ -151,6 +152,7 @@ def test_bad_options_are_rejected(method):
         solve(inst, method, connectivity="magic")
 
 
+@pytest.mark.slow
 def test_pruning_cuts_the_model_and_keeps_the_answer():
     from bille.encodings.model import Options, build
 

@@ -70,6 +70,7 @@ def test_corridor_is_one_tile_wide_between_the_rooms():
     assert result.schedule is not None and validate(inst, result.schedule).valid
 
 
+@pytest.mark.slow
 def test_a_generated_reconfiguration_is_solved_exactly():
     inst = random_reconfiguration(6, 5, 10, 1, 1, seed=2)
     for method in ("cpsat", "sat"):

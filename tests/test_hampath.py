@@ -49,6 +49,7 @@ def test_the_optimum_is_the_bound_exactly_when_a_hamiltonian_path_starts_at_the_
     assert _optimum_is_bound(inst) == exists
 
 
+@pytest.mark.slow
 def test_without_a_path_the_optimum_is_above_the_bound_by_the_detour():
     # the middle of three in a row: the robot must come back through its start vertex
     inst = reduction(grid_graph(PATH3), 1, start=(1, 0))
@@ -57,6 +58,7 @@ def test_without_a_path_the_optimum_is_above_the_bound_by_the_detour():
     assert found.length == inst.meta["bound"] + 4
 
 
+@pytest.mark.slow
 def test_the_gadget_takes_t_g_steps_under_the_full_rules():
     """The search above only picks and places task cells; the exact solver, which may pick and
     place any tile, agrees on one gadget: t_g steps from the robot's corner."""

@@ -13,6 +13,7 @@ from bille.instances.grid import is_connected
 from bille.instances.moveset import Kind
 from bille.instances.rules import State
 from bille.solvers import solve, validate
+from helpers import make
 from bille.tools.cli import main
 
 
@@ -258,3 +259,22 @@ def test_an_early_pick_keeps_the_tile_a_later_place_stands_on():
     result = loop.run("temporal-astar")
     assert result.status == "feasible"
     assert validate(inst, result.schedule).valid
+
+
+def test_a_sequence_the_loop_cannot_derive_is_unsolved_not_bad_input(capsys, tmp_path):
+    # moving (0, 0) to (1, 1) disconnects the structure unless another tile serves first: the
+    # brute-force search finds 8 steps; the loop's sequence derivation gives up, which is a
+    # status (exit 1), not bad input (exit 2)
+    inst = make("TT.\nT..", [{"at": [0, 1]}], goal=".T.\nTT.", moveset="point", robot_goals=[[0, 1]])
+    assert solve(inst, "bfs").metrics.makespan == 8
+    for method in ("temporal-astar", "mstar"):
+        result = solve(inst, method)
+        assert result.status == "unsolved" and result.schedule is None
+        assert "no order of the tile moves" in result.stats["failure"]
+    path = tmp_path / "hard.yaml"
+    path.write_text("name: hard\nmoveset: point\ngrid: |\n  TT.\n  T..\ngoal: |\n  .T.\n  TT.\n"
+                    "robots: [{at: [0, 1]}]\nrobot_goals: [[0, 1]]\n")
+    code, out, _ = cli(capsys, "solve", str(path))
+    assert code == 1 and "unsolved" in out
+    code, _, err = cli(capsys, "plan-sequence", str(path))
+    assert code == 1 and "no order of the tile moves" in err

@@ -1,0 +1,122 @@
+"""Hostile input: every kind is answered by one line on stderr and exit 2, within seconds and
+without exhausting memory; nothing half-written."""
+from __future__ import annotations
+
+import pytest
+
+from bille.instances.bundled import bundled_path
+
+LAUGHS = "\n".join(
+    [f'{k}: &{k} [{", ".join(["*" + p] * 9) if p else ", ".join(["lol"] * 9)}]'
+     for k, p in zip("abcdefghi", [None, *"abcdefgh"])])
+
+
+@pytest.fixture
+def one_line(cli, capsys):
+    """``one_line(argv, message)``: exit 2 with one line on stderr containing ``message``."""
+    def check(argv, message) -> None:
+        capsys.readouterr()
+        assert cli(argv) == 2
+        err = capsys.readouterr().err
+        assert message in err and len(err.strip().splitlines()) == 1, err
+    return check
+
+
+@pytest.mark.parametrize("where", ["top", "meta", "schedule"])
+def test_yaml_aliases_are_refused_before_they_expand(tmp_path, one_line, where):
+    instance = tmp_path / "i.yaml"
+    schedule = tmp_path / "s.yaml"
+    text = bundled_path("corridor-2").read_text()
+    sched = bundled_path("corridor-2.schedule").read_text()
+    if where == "top":
+        text = LAUGHS + "\n" + text
+    elif where == "meta":
+        text += "meta:\n" + "".join("  " + line + "\n" for line in LAUGHS.splitlines())
+    else:
+        sched = LAUGHS + "\n" + sched
+    instance.write_text(text)
+    schedule.write_text(sched)
+    one_line(["check", instance, schedule], "YAML aliases")
+    if where != "schedule":
+        for argv in (["show", instance], ["solve", instance, "-m", "bfs"], ["plan-sequence", instance],
+                     ["gap", instance, "--methods", "bfs", "--csv", tmp_path / "g.csv"]):
+            one_line(argv, "YAML aliases")
+        assert not (tmp_path / "g.csv").exists()
+
+
+def test_a_grid_too_large_for_memory_is_refused_before_allocating(tmp_path, one_line, monkeypatch):
+    monkeypatch.setenv("BILLE_MEMORY_GIB", "0.001")
+    path = tmp_path / "big.yaml"
+    path.write_text("name: big\nmoveset: S7\ngrid: |\n" + "".join("  " + "T" * 60 + "\n" for _ in range(60))
+                    + "robots: [{front: [1, 0], back: [0, 0]}]\n")
+    for argv in (["check", path, bundled_path("corridor-2.schedule")], ["solve", path, "-m", "bfs"],
+                 ["view", path, "--png", tmp_path / "x.png"]):
+        one_line(argv, "a 60x60 grid needs about")
+    assert not (tmp_path / "x.png").exists()
+
+
+def test_a_long_one_row_grid_is_refused_with_the_real_budget(tmp_path, one_line):
+    path = tmp_path / "wide.yaml"
+    path.write_text("name: wide\nmoveset: S7\ngrid: |\n  " + "T" * 3_000_000 + "\nrobots: [{front: [1, 0], back: [0, 0]}]\n")
+    one_line(["solve", path, "-m", "bfs"], "a 3000000x1 grid needs about")
+
+
+@pytest.mark.parametrize("argv", [
+    ["gen", "random", "--width", "100000", "--height", "100000"],
+    ["gen", "crowded", "--width", "100000", "--height", "100000", "--robots", "2"],
+    ["gen", "corridor", "--room", "100000"],
+    ["gen", "hampath", "--vertices", "8", "-s", "100000"],
+])
+def test_generators_refuse_sizes_that_cannot_fit(tmp_path, one_line, argv):
+    out = tmp_path / "g.yaml"
+    one_line([*argv, "-o", out], "grid needs about")
+    assert not out.exists()
+
+
+def test_too_many_robots_for_the_planners_tables(tmp_path, one_line, monkeypatch):
+    # 60 point robots on a 12x12 block: the grid's tables fit a budget their distance tables do not
+    from bille.heuristics.joint import table_bytes
+    from bille.instances.generators.random import crowded
+    from bille.instances import save_instance
+    from bille.instances.limits import GIB, table_bytes as grid_bytes
+
+    inst = crowded(12, 12, 60, holes=0.0, moveset="point")
+    path = tmp_path / "many.yaml"
+    save_instance(inst, path)
+    grid, tables = grid_bytes(inst.moveset, 12, 12), table_bytes(inst)
+    assert grid < tables
+    monkeypatch.setenv("BILLE_MEMORY_GIB", str((grid + tables) / 2 / GIB))
+    for method in ("temporal-astar", "astar", "mstar"):
+        one_line(["solve", path, "-m", method], "of distance tables")
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["-m", "cpsat", "-O", "max_makespan=abc"], "option max_makespan expects a whole number"),
+    (["-m", "cpsat", "-O", "threads=abc"], "option threads expects a whole number"),
+    (["-m", "cpsat", "-O", "time_limit=abc"], "option time_limit expects a finite number"),
+    (["-m", "bfs", "-O", "time_limit=nan"], "option time_limit expects a finite number"),
+    (["-m", "mstar", "-O", "epsilon=[1,2]"], "option epsilon expects a finite number"),
+    (["-m", "sat", "-O", "solver=nosuchsolver"], "unknown solver 'nosuchsolver'"),
+    (["-m", "cpsat", "--time-limit", "nan"], "option time_limit expects a finite number"),
+    (["-m", "cpsat", "--time-limit", "inf"], "option time_limit expects a finite number"),
+    (["-m", "mstar", "--epsilon", "nan"], "option epsilon expects a finite number"),
+    (["-m", "cpsat", "-O", "prune=maybe"], "option prune expects true or false"),
+    (["-m", "cpsat", "-O", "nosuch=1"], "unknown option 'nosuch'"),
+    (["-m", "temporal-astar", "-O", "horizon=0"], "option horizon expects a number of at least 1"),
+])
+def test_bad_options_are_one_line(one_line, argv, message):
+    one_line(["solve", "corridor-2", *argv], message)
+
+
+def test_gap_without_methods_is_bad_input(tmp_path, one_line):
+    one_line(["gap", "point-4", "--methods", ",,,", "--csv", tmp_path / "g.csv"], "no method named")
+    assert not (tmp_path / "g.csv").exists()
+
+
+@pytest.mark.parametrize("option", ["--resume", "--secrets"])
+def test_binary_files_are_named_not_decoded(tmp_path, one_line, option):
+    blob = tmp_path / "blob.bin"
+    blob.write_bytes(bytes(range(256)) * 4)
+    argv = ["run", "--resume", blob] if option == "--resume" else \
+        ["run", "lt-4", "lt-4.schedule", "--robots", "left,right", "--secrets", blob]
+    one_line(argv, "not UTF-8 text" if option == "--secrets" else "not UTF-8")
