@@ -23,13 +23,13 @@ Tables (``P`` poses, ``A`` actions; -1 means none):
 """
 from __future__ import annotations
 
-from collections import OrderedDict
 from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
 
 from .grid import HEADING_VECTORS, rotate
+from .lru import LRU
 from .moveset import Action, Moveset
 
 Offset = tuple[int, int]
@@ -169,19 +169,10 @@ def compile_posegraph(moveset: Moveset, width: int, height: int, obstacles: np.n
     """
     obstacles = np.asarray(obstacles, dtype=bool).reshape(-1)
     key = (moveset, width, height, obstacles.tobytes())
-    graph = _CACHE.get(key)
-    if graph is None:
-        graph = _compile(moveset, width, height, obstacles)
-        _CACHE[key] = graph
-        while len(_CACHE) > _CACHE_SIZE:
-            _CACHE.popitem(last=False)
-    else:
-        _CACHE.move_to_end(key)
-    return graph
+    return _CACHE.get(key, lambda: _compile(moveset, width, height, obstacles))
 
 
-_CACHE: OrderedDict = OrderedDict()
-_CACHE_SIZE = 16
+_CACHE: LRU[PoseGraph] = LRU(16)
 
 
 def _compile(moveset: Moveset, width: int, height: int, obstacles: np.ndarray) -> PoseGraph:

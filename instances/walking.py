@@ -11,12 +11,12 @@ poses the caller names.
 """
 from __future__ import annotations
 
-from collections import OrderedDict
 
 import numpy as np
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
+from .lru import LRU
 from .posegraph import PoseGraph
 from .moveset import Kind
 
@@ -46,8 +46,8 @@ class Walk:
         manipulating = np.isin(graph.kind, (Kind.PICK, Kind.PLACE))
         self._targets = np.where(manipulating[None, :] & standing[:, None], graph.target, -1)
         self._moves: dict[int, list[tuple[int, int, frozenset]]] = {}
-        self._dist: OrderedDict = OrderedDict()
-        self._forward: OrderedDict[int, np.ndarray] = OrderedDict()
+        self._dist: LRU[np.ndarray] = LRU(256)
+        self._forward: LRU[np.ndarray] = LRU(64)
         self._reverse: csr_matrix | None = None
         self._forward_graph: csr_matrix | None = None
 
@@ -100,34 +100,24 @@ class Walk:
     def distances_to(self, key, sources) -> np.ndarray:
         """``int32[P]``: fewest steps from each pose to one of the poses ``sources()`` (called
         only on a cache miss; ``key`` names the set)."""
-        if key in self._dist:
-            self._dist.move_to_end(key)
-            return self._dist[key]
-        found = np.asarray(sources(), dtype=np.int64)
-        n = self.succ.shape[0]
-        if len(found) == 0:
-            dist = np.full(n, UNREACHABLE, dtype=np.int32)
-        else:
+        def make() -> np.ndarray:
+            found = np.asarray(sources(), dtype=np.int64)
+            if len(found) == 0:
+                return np.full(self.succ.shape[0], UNREACHABLE, dtype=np.int32)
             out = dijkstra(self._reverse_graph(), indices=found, unweighted=True, min_only=True)
-            dist = np.where(np.isfinite(out), out, UNREACHABLE).astype(np.int32)
-        self._dist[key] = dist
-        while len(self._dist) > 256:
-            self._dist.popitem(last=False)
-        return dist
+            return np.where(np.isfinite(out), out, UNREACHABLE).astype(np.int32)
+
+        return self._dist.get(key, make)
 
     def from_pose(self, pose: int) -> np.ndarray:
         """``int32[P]``: fewest steps from ``pose`` to each pose (forward search). Cached."""
-        if pose in self._forward:
-            self._forward.move_to_end(pose)
-            return self._forward[pose]
-        if self._forward_graph is None:
-            self._forward_graph = self._reverse_graph().T.tocsr()
-        out = dijkstra(self._forward_graph, indices=[pose], unweighted=True)[0]
-        dist = np.where(np.isfinite(out), out, UNREACHABLE).astype(np.int32)
-        self._forward[pose] = dist
-        while len(self._forward) > 64:
-            self._forward.popitem(last=False)
-        return dist
+        def make() -> np.ndarray:
+            if self._forward_graph is None:
+                self._forward_graph = self._reverse_graph().T.tocsr()
+            out = dijkstra(self._forward_graph, indices=[pose], unweighted=True)[0]
+            return np.where(np.isfinite(out), out, UNREACHABLE).astype(np.int32)
+
+        return self._forward.get(pose, make)
 
     def _reverse_graph(self) -> csr_matrix:
         if self._reverse is None:
@@ -155,21 +145,14 @@ class Walk:
         return int(row[best[1]])
 
 
-_CACHE: OrderedDict = OrderedDict()
+_CACHE: LRU[Walk] = LRU(64)
 
 
 def walk_for(graph: PoseGraph, tiles: np.ndarray, carrying: bool = False) -> Walk:
-    """The :class:`Walk` of ``graph`` on ``tiles``, cached by graph, tile set and carrying flag."""
+    """The :class:`Walk` of ``graph`` on ``tiles``, cached by graph, tile set and carrying flag
+    (a graph's id may be reused once it is gone: the cached walk must be of this graph)."""
     key = (id(graph), np.asarray(tiles, dtype=bool).tobytes(), carrying)
-    walk = _CACHE.get(key)
-    if walk is None or walk.graph is not graph:
-        walk = Walk(graph, tiles, carrying)
-        _CACHE[key] = walk
-        while len(_CACHE) > 64:
-            _CACHE.popitem(last=False)
-    else:
-        _CACHE.move_to_end(key)
-    return walk
+    return _CACHE.get(key, lambda: Walk(graph, tiles, carrying), valid=lambda walk: walk.graph is graph)
 
 
 def runnable(tiles: np.ndarray, cut: np.ndarray, pick: int, place: int, nbr, graph, w: int, h: int) -> bool:
