@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.sparse import csr_matrix
-from scipy.sparse.csgraph import dijkstra
+from scipy.sparse.csgraph import connected_components, dijkstra
 
 from .lru import LRU
 from .posegraph import PoseGraph
@@ -50,6 +50,7 @@ class Walk:
         self._forward: LRU[np.ndarray] = LRU(64)
         self._reverse: csr_matrix | None = None
         self._forward_graph: csr_matrix | None = None
+        self._components: np.ndarray | None = None
 
     # ---- moves --------------------------------------------------------------------------------
 
@@ -118,6 +119,13 @@ class Walk:
             return np.where(np.isfinite(out), out, UNREACHABLE).astype(np.int32)
 
         return self._forward.get(pose, make)
+
+    def components(self) -> np.ndarray:
+        """``int[P]``: the strongly connected component of every pose: poses of one component
+        reach each other (a quick answer for many reachability questions at once)."""
+        if self._components is None:
+            self._components = connected_components(self._reverse_graph(), directed=True, connection="strong")[1]
+        return self._components
 
     def _reverse_graph(self) -> csr_matrix:
         if self._reverse is None:

@@ -120,3 +120,10 @@ def test_binary_files_are_named_not_decoded(tmp_path, one_line, option):
     argv = ["run", "--resume", blob] if option == "--resume" else \
         ["run", "lt-4", "lt-4.schedule", "--robots", "left,right", "--secrets", blob]
     one_line(argv, "not UTF-8 text" if option == "--secrets" else "not UTF-8")
+
+
+def test_crowded_gives_up_at_once_when_the_robots_cannot_fit(tmp_path, one_line):
+    out = tmp_path / "c.yaml"
+    one_line(["gen", "crowded", "--width", "100", "--height", "100", "--robots", "5000", "--moveset", "point",
+              "-o", out], "no crowded 100x100 map with 5000 robots")
+    assert not out.exists()

@@ -15,12 +15,13 @@ iterated in sorted order). Instances come out checked (:func:`~bille.instances.c
 """
 from __future__ import annotations
 
+import bisect
 import random
 
 import numpy as np
 
 from ..errors import InstanceError
-from ..grid import Grid, articulation_points, neighbour_table
+from ..grid import Grid, articulation_points, may_pick, neighbour_table
 from ..instance import Instance, Robot, Task, check_instance
 from ..limits import check_size
 from ..moveset import load_moveset
@@ -82,14 +83,18 @@ def crowded(width: int, height: int, robots: int, *, holes: float = 0.1, seed: i
     ms = load_moveset(moveset)
     rnd = random.Random(seed)
     n = width * height
+    crowded_out = 0
     for _attempt in range(200):
         tiles = np.ones(n, dtype=bool)
         for c in rnd.sample(range(n), int(holes * n)):
-            if not articulation_points(tiles, width, height)[c]:
+            if may_pick(tiles, width, height, c):  # keeps the rest connected
                 tiles[c] = False
         try:
             placed = _place_robots(tiles, width, height, robots, ms.footprint, rnd)
         except InstanceError:
+            crowded_out += 1
+            if crowded_out >= 10:  # the robots do not fit, whatever the holes: say so now
+                break
             continue
         goals = tuple(placed[(i + 1) % robots].front for i in range(robots))
         zeros = np.zeros(n, dtype=bool)
@@ -97,7 +102,7 @@ def crowded(width: int, height: int, robots: int, *, holes: float = 0.1, seed: i
                         tuple(placed), robot_goals=goals, meta={"generator": "crowded", "seed": seed})
         if _goals_reachable(inst):
             return check_instance(inst)
-    raise InstanceError(f"no crowded {width}x{height} map with {robots} robots found in 200 tries "
+    raise InstanceError(f"no crowded {width}x{height} map with {robots} robots found in {_attempt + 1} tries "
                         f"(more room, fewer robots or fewer holes)")
 
 
@@ -202,28 +207,32 @@ def _place_robots(tiles: np.ndarray, width: int, height: int, count: int, footpr
     cells = [(c % width, c // width) for c in np.flatnonzero(tiles).tolist()]
     placed: list[Robot] = []
     used: set[XY] = set()
+    free = sorted(cells)  # point robots: the free cells, kept sorted as they are taken
     for _ in range(count):
-        robot = _robot_in(cells, used, footprint, rnd)
+        if footprint == "point":
+            robot = Robot(rnd.choice(free)) if free else None
+        else:
+            robot = _robot_in(cells, used, footprint, rnd)
         if robot is None:
             raise InstanceError(f"{count} robots do not fit on {len(cells)} tiles")
         placed.append(robot)
-        used |= set(_feet(robot)) | _neighbours(robot.front)
+        taken = (set(_feet(robot)) | _neighbours(robot.front)) - used
+        used |= taken
+        for xy in taken:
+            k = bisect.bisect_left(free, xy)
+            if k < len(free) and free[k] == xy:
+                del free[k]
     return placed
 
 
 def _robot_in(cells: list[XY], used: set[XY], footprint: str, rnd: random.Random, heading: int = 0) -> Robot | None:
     free = set(cells) - used
-    options = []
-    for x, y in sorted(free):
-        if footprint == "point":
-            options.append(Robot((x, y)))
-            continue
-        steps = ((heading, 0),) if heading else _STEPS
-        for dx, dy in steps:
-            back = (x - dx, y - dy)
-            if back in free:
-                options.append(Robot((x, y), back))
-    return rnd.choice(options) if options else None
+    if footprint == "point":
+        options = sorted(free)
+        return Robot(rnd.choice(options)) if options else None
+    steps = ((heading, 0),) if heading else _STEPS
+    pairs = [((x, y), (x - dx, y - dy)) for x, y in sorted(free) for dx, dy in steps if (x - dx, y - dy) in free]
+    return Robot(*rnd.choice(pairs)) if pairs else None
 
 
 def _random_move(now: np.ndarray, start: np.ndarray, held: set, width: int, height: int, graph,
@@ -248,10 +257,16 @@ def _random_move(now: np.ndarray, start: np.ndarray, held: set, width: int, heig
 
 
 def _goals_reachable(inst: Instance) -> bool:
+    """Whether every robot can walk alone to its goal cell: at once where a pose with the front
+    foot on the goal is in the start pose's strongly connected component, else by search."""
     tiles = inst.start.tiles
     for i, (g, goal) in enumerate(zip(inst.world.graphs, inst.robot_goals)):
         walk = walk_for(g, tiles)
         pose = inst.start_state.poses[i]
-        if walk.distances(goal[1] * inst.width + goal[0])[pose] >= UNREACHABLE:
+        cell = goal[1] * inst.width + goal[0]
+        comp = walk.components()
+        if (comp[(g.feet[:, 0] == cell) & walk.standing] == comp[pose]).any():
+            continue
+        if walk.distances(cell)[pose] >= UNREACHABLE:
             return False
     return True
