@@ -13,6 +13,8 @@ from pathlib import Path
 from bille.instances import BilleError, Instance, OptionError
 from bille.solvers import solve
 
+from .tables import text_table
+
 DEFAULT_METHODS = ("temporal-astar", "mstar", "astar", "cpsat", "sat")
 EXACT = ("cpsat", "sat", "bfs")
 FIELDS = ["instance", "method", "status", "makespan", "tiles_traveled", "time_s", "gap_percent", "note"]
@@ -59,16 +61,13 @@ def run(instances: list[Instance], methods, time_limit: float, threads: int = 1,
 
 
 def table(rows: list[dict]) -> list[str]:
-    head = f"{'instance':<14} {'method':<15} {'status':<10} {'makespan':>8} {'tiles':>6} {'time [s]':>9} {'gap':>7}  note"
-    out = [head, "-" * len(head)]
-    for r in rows:
-        def show(v, fmt="{}"):
-            return "-" if v is None else fmt.format(v)
+    def show(v, fmt="{}"):
+        return None if v is None else fmt.format(v)
 
-        out.append(f"{r['instance']:<14} {r['method']:<15} {r['status']:<10} {show(r['makespan']):>8} "
-                   f"{show(r['tiles_traveled']):>6} {show(r['time_s'], '{:.3f}'):>9} {show(r['gap_percent'], '{:+.1f}%'):>7}  "
-                   f"{_short(r['note'])}")
-    return out
+    columns = ["instance", "method", "status", "makespan", "tiles", "time [s]", "gap", "note"]
+    return text_table(columns, [[r["instance"], r["method"], r["status"], r["makespan"], r["tiles_traveled"],
+                                 show(r["time_s"], "{:.3f}"), show(r["gap_percent"], "{:+.1f}%"), _short(r["note"])]
+                                for r in rows], right={"makespan", "tiles", "time [s]", "gap"})
 
 
 def write_csv(rows: list[dict], path: Path) -> None:

@@ -20,6 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..tables import text_table
+
 MAPS = [f"compare-{m}" for m in range(2, 7)]
 MOVESETS = ("S5", "S7")
 EPSILONS = (1, 2, 3)
@@ -94,7 +96,8 @@ def tables(rows: list[dict], time_limit: float) -> list[str]:
     same map, the baseline of the same run."""
     out = []
     robots = sorted({r["robots"] for r in rows})
-    head = "".join(f"{'m=' + str(m):>9}" for m in robots)
+    columns = ["planner"] + [f"m={m}" for m in robots]
+    right = set(columns[1:])
     metrics = [("time steps", "makespan", str), ("tiles traveled", "tiles_traveled", str),
                ("planning time [s]", "time_s", lambda t: f"{t:.3f}")]
     for ms in sorted({r["moveset"] for r in rows}):
@@ -103,20 +106,20 @@ def tables(rows: list[dict], time_limit: float) -> list[str]:
         cell = {(label(r), r["robots"]): r for r in sub}
         for title, field, fmt in metrics:
             out.append(f"{title} ({ms}, time limit {time_limit:g} s)")
-            out.append(f"  {'':24}{head}")
-            for lbl in labels:
-                vals = [cell.get((lbl, m)) for m in robots]
-                out.append(f"  {lbl:24}" + "".join(f"{fmt(r[field]) if r and r['solved'] else 'N/A':>9}" for r in vals))
+            out += text_table(columns, [[lbl] + [fmt(r[field]) if r and r["solved"] else "N/A"
+                                                 for r in (cell.get((lbl, m)) for m in robots)] for lbl in labels],
+                              right=right)
             out.append("")
         out.append(f"planning time / M*(eps=1) on the same map ({ms}; below 1 is faster)")
-        out.append(f"  {'':24}{head}")
+        table = []
         for lbl in labels:
             ratios = []
             for m in robots:
                 r, b = cell.get((lbl, m)), cell.get(("M*(eps=1)", m))
                 ok = r and r["solved"] and b and b["solved"] and b["time_s"] > 0
                 ratios.append(f"{r['time_s'] / b['time_s']:.3g}" if ok else "-")
-            out.append(f"  {lbl:24}" + "".join(f"{x:>9}" for x in ratios))
+            table.append([lbl] + ratios)
+        out += text_table(columns, table, right=right)
         out.append("")
     return out
 

@@ -18,6 +18,8 @@ import numpy as np
 from bille.instances import BilleError, Instance
 from bille.solvers import solve
 
+from ..tables import text_table
+
 FIELDS = ("map", "robots", "tasks", "status_off", "steps_off", "traveled_off", "time_off", "status_on", "steps_on",
           "traveled_on", "time_on", "relays", "swaps", "steps_decrease", "traveled_decrease")
 SIZES = ((10, 2), (20, 4), (30, 6), (50, 10))  # (tiles moved, robots) of the random instances
@@ -62,14 +64,14 @@ def _cell(v) -> str:
 
 
 def table(rows: list[dict]) -> list[str]:
-    out = ["load transfer: Temporal A* without (baseline) and with load transfer; decrease in percent",
-           f"{'map':<8} {'robots':>6} {'tasks':>5} | {'steps off':>9} {'on':>5} {'dec%':>6} | "
-           f"{'traveled off':>12} {'on':>5} {'dec%':>6} | {'relays':>6} {'swaps':>5} | {'plan s off/on':>13}"]
-    for r in rows:
-        out.append(f"{r['map']:<8} {r['robots']:>6} {_cell(r['tasks']):>5} | {_cell(r['steps_off']):>9} "
-                   f"{_cell(r['steps_on']):>5} {_cell(r['steps_decrease']):>6} | {_cell(r['traveled_off']):>12} "
-                   f"{_cell(r['traveled_on']):>5} {_cell(r['traveled_decrease']):>6} | {r['relays']:>6} "
-                   f"{r['swaps']:>5} | {r['time_off']:>6}/{r['time_on']:<6}")
+    columns = ["map", "robots", "tasks", "steps off", "on", "dec%", "traveled off", "on ", "dec% ", "relays",
+               "swaps", "plan s off/on"]
+    out = ["load transfer: Temporal A* without (baseline) and with load transfer; decrease in percent"]
+    out += text_table(columns, [[r["map"], r["robots"], _cell(r["tasks"]), _cell(r["steps_off"]), _cell(r["steps_on"]),
+                                 _cell(r["steps_decrease"]), _cell(r["traveled_off"]), _cell(r["traveled_on"]),
+                                 _cell(r["traveled_decrease"]), r["relays"], r["swaps"],
+                                 f"{r['time_off']}/{r['time_on']}"] for r in rows],
+                      right=set(columns) - {"map", "plan s off/on"})
     for r in rows:
         for tag in ("off", "on"):
             if r[f"steps_{tag}"] is None:
