@@ -12,8 +12,10 @@ from bille.instances.grid import HEADING_VECTORS, components, is_connected
 def eager_connectivity(builder) -> None:
     """Layered reachability from the first tile (in cell order) at every inner time point, added
     to the model of the ``builder`` (:class:`.model._Builder`): ``root``, ``none_before``
-    and ``reach`` variables, unary distance labels of at most ``|goal tiles| - 1`` layers (no
-    more tiles exist at any time, so every tile of a connected set is that close to the root)."""
+    and ``reach`` variables, unary distance labels of at most ``|goal tiles| - 1`` layers. Sound
+    and complete: tiles on the grid plus tiles carried number ``|goal tiles|`` at every time, so
+    a connected set has at most that many tiles, and each of them is within ``|goal tiles| - 1``
+    neighbour steps of the root; a disconnected set has a tile no layer reaches."""
     m, W = builder.m, builder.world.width
     cells = builder.cells
     layers = max(1, min(len(cells), int(builder.inst.goal_tiles.sum())) - 1)
@@ -56,7 +58,9 @@ def connectivity_cuts(model, instance: Instance, masks: list[np.ndarray]) -> lis
 
     For a component ``S`` of a disconnected step and a tile ``c'`` of another component: not
     (all of ``S`` tiles, none of ``S``'s neighbour cells a tile, and ``c'`` a tile). True of every
-    connected tile set, false of this one.
+    connected tile set (if all of ``S`` are tiles and none of its neighbours, ``S`` is a whole
+    component, and a tile outside it makes a second one), false of this one: a cut never removes
+    a valid schedule.
     """
     W, H = instance.width, instance.height
     cuts, seen = [], set()

@@ -21,12 +21,21 @@ picks and places; new feet on tiles; per cell and step at most one robot's colli
 step, either eagerly (``reach``: layered reachability from the first tile, i.e. unary distance
 labels) or lazily (:func:`connectivity_cuts`, added when a solution breaks it).
 
-Pruning (each can be switched off to measure it): *reach* keeps a pose at ``t`` only if the
-robot can walk there from its start in ``t`` steps and on to its goal cell in ``T - t`` steps
-(distances in the relaxed pose graph, obstacles only, because tiles may appear); *cells* keeps
-tile variables only for cells that can ever hold a tile (start or goal tiles, or the target of
-some place action a robot could reach). Tiles have no identity: a cell holds a tile or not, so
-symmetric assignments of tiles to cells never arise.
+Pruning (each can be switched off to measure it), and why no schedule of makespan at most ``T``
+is lost (a shorter one is padded with waits, which keep every pose, load and tile):
+
+- *reach* keeps a pose at ``t`` only if the robot can walk there from its start in ``t`` steps and
+  on to its goal cell in ``T - t`` steps, in the relaxed pose graph (obstacles only,
+  :mod:`bille.instances.distances`). Every step of a schedule is an edge of that graph or leaves
+  the pose alone (wait, pick, place), so a pose a schedule visits at ``t`` is that close to both.
+- *cells* keeps tile variables only for cells that can ever hold a tile: start or goal tiles, or
+  the target of a place action from a pose some robot may have. Only a place creates a tile, so
+  every other cell is empty at every time; a pose whose feet need such a cell is never used.
+- *change windows*: a cell can change only at a step where some robot may stand at a pose whose
+  pick or place targets it; before the first such step it holds its start value, after the last
+  its goal value (the value at ``T``), since only picks and places change cells.
+- Tiles have no identity: a cell holds a tile or not, so symmetric assignments of tiles to cells
+  never arise. The connectivity encodings are argued in :mod:`.connectivity`.
 """
 from __future__ import annotations
 
