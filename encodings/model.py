@@ -378,27 +378,3 @@ class _Builder:
                 for t in range(k + 1, self.T + 1):
                     waits = [v for v, p, a in m.y[(i, t)] if g.kind[a] == Kind.WAIT]
                     m.clauses.append([-d] + waits)
-
-
-def decode(model: Model, instance: Instance, value) -> np.ndarray:
-    """Action ids ``int[m, T]`` from a solution (``value(var) -> bool``)."""
-    ids = np.zeros((instance.num_robots, model.T), dtype=np.int64)
-    for (i, t), group in model.y.items():
-        for v, _, a in group:
-            if value(v):
-                ids[i, t - 1] = a
-                break
-    return ids
-
-
-def tiles_at(model: Model, instance: Instance, value) -> list[np.ndarray]:
-    """The tile mask of every time point of a solution."""
-    n = instance.width * instance.height
-    out = []
-    for t in range(model.T + 1):
-        mask = np.zeros(n, dtype=bool)
-        for (tt, c), lit in model.tile.items():
-            if tt == t and (value(lit) if lit > 0 else not value(-lit)):
-                mask[c] = True
-        out.append(mask)
-    return out

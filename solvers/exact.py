@@ -28,7 +28,8 @@ import numpy as np
 from bille.encodings.cnf import SOLVERS, SatBackend
 from bille.encodings.cpsat import CpSatBackend
 from bille.encodings.connectivity import connectivity_cuts
-from bille.encodings.model import CONNECTIVITY, Options, OutOfTime, build, decode, tiles_at
+from bille.encodings.model import CONNECTIVITY, Options, OutOfTime, build
+from bille.encodings.solution import decode, tiles_at
 from bille.heuristics import temporal_astar
 from bille.instances import Instance, OptionError
 from bille.instances.rules import goal_violation
