@@ -18,7 +18,6 @@ from bille.instances import Instance, OptionError
 from bille.instances.limits import human, memory_budget
 from bille.instances.result import Result
 from bille.instances.schedule import Schedule
-
 from bille.instances.walking import UNREACHABLE, Walk, walk_for
 
 Poses = tuple[int, ...]

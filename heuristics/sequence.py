@@ -31,7 +31,6 @@ import numpy as np
 
 from bille.instances import Instance, InstanceError
 from bille.instances.grid import articulation_points, is_connected, neighbour_table
-
 from bille.instances.walking import runnable, walk_for
 
 

@@ -9,13 +9,13 @@ import inspect as _inspect
 import time as _time
 
 from bille.instances import Instance, OptionError
-
-from .bounds import Bounds, lower_bound
 from bille.instances.metrics import Metrics, metrics
-from .options import check_options
-from .registry import METHODS
 from bille.instances.result import STATUSES, Result
 from bille.instances.schedule import Schedule, bind, dump_schedule, load_schedule, save_schedule, schedule_from_text
+
+from .bounds import Bounds, lower_bound
+from .options import check_options
+from .registry import METHODS
 from .validate import Report, validate
 
 

@@ -14,7 +14,6 @@ import numpy as np
 from bille.instances import Instance, OptionError
 from bille.instances.moveset import Kind
 from bille.instances.rules import State, apply, goal_violation
-
 from bille.instances.result import Result
 from bille.instances.schedule import Schedule
 

@@ -26,18 +26,18 @@ import time
 import numpy as np
 
 from bille.encodings.cnf import SOLVERS, SatBackend
-from bille.encodings.cpsat import CpSatBackend
 from bille.encodings.connectivity import connectivity_cuts
+from bille.encodings.cpsat import CpSatBackend
 from bille.encodings.model import CONNECTIVITY, Options, OutOfTime, build
 from bille.encodings.solution import decode, tiles_at
 from bille.heuristics import temporal_astar
 from bille.instances import Instance, OptionError
-from bille.instances.rules import goal_violation
-
-from .bounds import Bounds, lower_bound
 from bille.instances.metrics import metrics
 from bille.instances.result import Result
+from bille.instances.rules import goal_violation
 from bille.instances.schedule import Schedule, bind
+
+from .bounds import Bounds, lower_bound
 
 SAT, UNSAT, UNKNOWN = "sat", "unsat", "unknown"
 

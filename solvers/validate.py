@@ -9,7 +9,6 @@ from dataclasses import dataclass
 
 from bille.instances import Instance
 from bille.instances.rules import State, Violation, goal_violation, run
-
 from bille.instances.metrics import Metrics, metrics
 from bille.instances.schedule import Schedule, bind
 
