@@ -28,7 +28,6 @@ def print_json(obj) -> None:
     click.echo(json.dumps(obj))
 
 
-
 def stderr_console():
     from rich.console import Console
 
@@ -52,6 +51,7 @@ def writable(*paths) -> None:
 
 
 def label_of(arg: str) -> str:
+    """A schedule's label from its file name, without the YAML suffix."""
     name = Path(arg).name
     for suffix in (".yaml", ".yml"):
         name = name.removesuffix(suffix)
@@ -59,6 +59,7 @@ def label_of(arg: str) -> str:
 
 
 def unique(names: list[str]) -> list[str]:
+    """The names, a repeated one numbered (``plan``, ``plan-2``)."""
     seen: dict[str, int] = {}
     out = []
     for n in names:
@@ -68,6 +69,7 @@ def unique(names: list[str]) -> list[str]:
 
 
 def trace_of(inst, schedule, label: str):
+    """A schedule's trace for recordings and pictures."""
     from .recording import entity_label
     from .trace import trace
 
@@ -75,6 +77,7 @@ def trace_of(inst, schedule, label: str):
 
 
 def record_traces(traces, path, *, spawn: bool = False, quiet: bool = False) -> None:
+    """Write the traces to a rerun recording at ``path`` (and say so unless ``quiet``)."""
     from .recording import record
 
     info = record(traces, path, spawn=spawn)
@@ -82,7 +85,6 @@ def record_traces(traces, path, *, spawn: bool = False, quiet: bool = False) -> 
         click.echo(f"bille: note: the viewer was not opened: {info['viewer']}", err=True)
     if path and not quiet:
         click.echo(f"recording written to {path} (steps 0..{info['frames'] - 1}, {info['bytes'] / 1e3:.0f} kB)")
-
 
 
 def output_folder(out: str) -> Path:
