@@ -47,7 +47,7 @@ import numpy as np
 
 from bille.instances import Instance
 from bille.instances.moveset import Kind
-from bille.instances.distances import INF, Relaxed
+from bille.instances.distances import INF, relaxed_for
 
 from .connectivity import eager_connectivity
 
@@ -172,7 +172,7 @@ class _Builder:
         for i, g in enumerate(self.world.graphs):
             start = self.state.poses[i]
             if self.opt.prune_reach:
-                relaxed = Relaxed(g)
+                relaxed = relaxed_for(g)
                 fwd = relaxed.from_pose(start)
                 bwd = relaxed.to_front(goals[i]) if goals[i] >= 0 else np.zeros(g.num_poses, np.int64)
             else:

@@ -16,6 +16,7 @@ import numpy as np
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
+from .lru import LRU
 from .moveset import Kind
 from .posegraph import PoseGraph
 
@@ -82,14 +83,14 @@ class Relaxed:
         return np.where(np.isfinite(d), d, INF).astype(np.int64)
 
 
-def facing(graph: PoseGraph, kind: Kind, cells: np.ndarray) -> np.ndarray:
-    """Valid poses from which an action of ``kind`` targets a cell of the flat mask ``cells``."""
-    acts = np.flatnonzero(graph.kind == kind)
-    if len(acts) == 0:
-        return np.zeros(0, dtype=np.int64)
-    t = graph.target[:, acts]
-    hit = (t >= 0) & cells[np.maximum(t, 0)] & (graph.succ[:, acts] >= 0)
-    return np.flatnonzero(hit.any(axis=1) & graph.valid)
+_CACHE: LRU[Relaxed] = LRU(16)
+
+
+def relaxed_for(graph: PoseGraph) -> Relaxed:
+    """The :class:`Relaxed` graph of ``graph``, one per pose graph: robots of one moveset, the
+    bounds and every horizon's model share its edges (a graph's id may be reused once it is
+    gone: the cached one must be of this graph)."""
+    return _CACHE.get(id(graph), lambda: Relaxed(graph), valid=lambda r: r.graph is graph)
 
 
 def manipulates_ahead(graph: PoseGraph) -> bool:

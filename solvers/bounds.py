@@ -63,7 +63,7 @@ from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
 from bille.instances import Instance, PoseGraph
-from bille.instances.distances import INF, Relaxed, manipulates_ahead
+from bille.instances.distances import INF, manipulates_ahead, relaxed_for
 from bille.instances.moveset import Kind
 
 # the weight of a pick or place edge in the transport graph: small enough that any number of
@@ -86,7 +86,7 @@ def lower_bound(instance: Instance) -> Bounds:
     state = instance.start_state
     start, goal = instance.start.tiles, instance.goal_tiles
     remove, fill = start & ~goal, goal & ~start
-    relaxed = [Relaxed(g) for g in world.graphs]
+    relaxed = [relaxed_for(g) for g in world.graphs]
     m = max(1, instance.num_robots)
     parts: dict = {}
     impossible: list[str] = []
@@ -199,7 +199,7 @@ def _transport(world, remove: np.ndarray, fill: np.ndarray) -> int | None:
     rows, cols, weights = [], [], []
     base = n  # cells are nodes 0 .. n-1, then each robot type's poses
     for g in {id(g): g for g in world.graphs}.values():
-        e = Relaxed(g).edges.tocoo()
+        e = relaxed_for(g).edges.tocoo()
         rows += [e.row + base]
         cols += [e.col + base]
         weights += [e.data]
