@@ -15,7 +15,7 @@ from typing import Iterator
 import numpy as np
 
 from bille.instances import Instance, OptionError
-from bille.instances.limits import human, memory_budget
+from bille.instances.limits import check_budget
 from bille.instances.result import Result
 from bille.instances.schedule import Schedule
 from bille.instances.walking import UNREACHABLE, Walk, walk_for
@@ -139,12 +139,8 @@ def table_bytes(instance: Instance) -> int:
 def check_tables(instance: Instance, method: str) -> None:
     """Refuse, before allocating, a problem whose per-robot distance tables (a numpy table and
     two plain lists per robot, for the inner loops) would not fit in memory."""
-    need = table_bytes(instance)
-    budget = memory_budget()
-    if need > budget:
-        raise OptionError(f"{method}: {instance.num_robots} robots on a {instance.width}x{instance.height} grid need "
-                          f"about {human(need)} of distance tables, more than the {human(budget)} "
-                          "this machine allows (BILLE_MEMORY_GIB sets it)")
+    check_budget(table_bytes(instance), lambda size: f"{method}: {instance.num_robots} robots on a {instance.width}x"
+                 f"{instance.height} grid need about {size} of distance tables", OptionError)
 
 
 def require_path_planning(instance: Instance, method: str = "astar") -> None:

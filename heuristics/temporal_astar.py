@@ -26,7 +26,7 @@ import numpy as np
 from bille.instances import Instance, OptionError
 from bille.instances.rules import State, apply
 
-from .joint import JointProblem, require_path_planning, to_result
+from .joint import JointProblem, to_result
 from .spacetime import reservation_step
 
 
@@ -46,7 +46,6 @@ def plan(instance: Instance, *, epsilon: float = 1.0, horizon: int = 5, time_lim
     shift_priorities : False keeps ``Q`` fixed (for comparison): a blocked robot then ends the run.
     priorities : the initial ``Q`` (default: robot ids in order).
     """
-    require_path_planning(instance, "temporal-astar")
     m = instance.num_robots
     if epsilon < 1:
         raise OptionError(f"temporal-astar: epsilon must be >= 1, got {epsilon}")

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import os
 import resource
+from typing import Callable
 
 from .errors import BilleError, InstanceError
 from .moveset import Moveset
@@ -51,11 +52,16 @@ def table_bytes(moveset: Moveset, width: int, height: int) -> int:
     return width * height * headings * actions * (per + 6) * 8
 
 
+def check_budget(need: int, says: Callable[[str], str], error: type[BilleError] = InstanceError) -> None:
+    """Raise ``error`` if ``need`` bytes exceed the budget: ``says(size)`` tells what needs that
+    size, and the budget and how to set it follow."""
+    budget = memory_budget()
+    if need > budget:
+        raise error(f"{says(human(need))}, more than the {human(budget)} this machine allows (BILLE_MEMORY_GIB sets it)")
+
+
 def check_size(movesets, width: int, height: int, what: str = "the instance",
                error: type[BilleError] = InstanceError) -> None:
     """Raise ``error`` if the tables of the grid with these movesets exceed the budget."""
     need = sum(table_bytes(ms, width, height) for ms in {m.name: m for m in movesets}.values())
-    budget = memory_budget()
-    if need > budget:
-        raise error(f"{what}: a {width}x{height} grid needs about {human(need)} for its pose tables, "
-                    f"more than the {human(budget)} this machine allows (BILLE_MEMORY_GIB sets it)")
+    check_budget(need, lambda size: f"{what}: a {width}x{height} grid needs about {size} for its pose tables", error)

@@ -61,11 +61,11 @@ def _check(method: str, name: str, value: Any, hint) -> None:
     elif typing.get_origin(base) is list:
         if not isinstance(value, list) or not all(isinstance(v, int) and not isinstance(v, bool) for v in value):
             fail("a list of whole numbers")
-    low = 0 if name == "time_limit" else _AT_LEAST.get(name)
-    if low is not None and isinstance(value, (int, float)) and not isinstance(value, bool):
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
         if name == "time_limit" and value <= 0:
             fail("a positive number of seconds")
-        if value < low:
+        low = _AT_LEAST.get(name)
+        if low is not None and value < low:
             fail(f"a number of at least {low}")
 
 

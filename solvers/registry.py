@@ -42,8 +42,6 @@ def plan_mstar(instance: Instance, *, epsilon: float = 1.0, od: bool = True, tim
     reconfiguration loop with M* as its motion layer (``load_transfer``, ``d_tr``, ``max_steps``
     as for the loop)."""
     if instance.is_reconfiguration:
-        if epsilon < 1:
-            raise OptionError(f"mstar: epsilon must be >= 1, got {epsilon}")
         return reconfigure.plan(instance, motion="mstar", load_transfer=load_transfer, d_tr=d_tr, epsilon=epsilon,
                                 time_limit=time_limit, max_steps=max_steps)
     return mstar.plan(instance, epsilon=epsilon, od=od, time_limit=time_limit, max_expansions=max_expansions)
