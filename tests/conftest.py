@@ -27,12 +27,12 @@ def cli():
 
 @pytest.fixture
 def rejects(cli, capsys):
-    """``rejects(argv, message, out)``: the arguments (with ``-o out``) are bad input: exit 2,
-    one line on stderr that contains ``message``, and nothing written to ``out``."""
-    def check(argv, message, out) -> None:
+    """``rejects(argv, message, out=None)``: the arguments (with ``-o out`` if given) are bad
+    input: exit 2, one line on stderr that contains ``message``, and nothing written to ``out``."""
+    def check(argv, message, out=None) -> None:
         capsys.readouterr()
-        assert cli([*argv, "-o", out]) == 2
+        assert cli([*argv, "-o", out] if out is not None else argv) == 2
         err = capsys.readouterr().err
-        assert message in err and len(err.strip().splitlines()) == 1
-        assert not out.exists()
+        assert message in err and len(err.strip().splitlines()) == 1, err
+        assert out is None or not out.exists()
     return check
