@@ -14,6 +14,7 @@ import numpy as np
 from bille.instances.walking import UNREACHABLE
 
 from .joint import JointProblem
+from .mstar import joint_plan
 from .spacetime import reservation_step
 
 MSTAR_EXPANSIONS = 100_000  # per M* replan: a joint plan that needs more ends the run
@@ -90,8 +91,6 @@ class Motion:
     def _mstar(self, fixed: dict[int, int], goals: list) -> list[int] | None:
         """The next joint action of the cached M* plan (planned again when the structure, the
         goals or the poses left it); manipulations replace waits where they fit."""
-        from .mstar import joint_plan
-
         poses = self.state.poses
         key = (self.state.key(), tuple(id(g) for g in goals), tuple(fixed))
         if self._joint_key != key or not self._joint:

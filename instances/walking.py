@@ -11,14 +11,13 @@ poses the caller names.
 """
 from __future__ import annotations
 
-
 import numpy as np
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import connected_components, dijkstra
 
 from .lru import LRU
-from .posegraph import PoseGraph
 from .moveset import Kind
+from .posegraph import PoseGraph
 
 UNREACHABLE = np.iinfo(np.int32).max // 2  # distance of poses that cannot reach the goal
 

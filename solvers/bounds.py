@@ -104,14 +104,14 @@ def lower_bound(instance: Instance) -> Bounds:
 
     k, carried = int(remove.sum()), int(sum(state.carrying))
     if k or carried:
-        ahead = all(manipulates_ahead(g) for g in world.graphs)
-        actions = 2 * k + carried + (k if ahead else 0)
+        ahead = {id(g): manipulates_ahead(g) for g, _ in world.groups}  # per moveset graph
+        actions = 2 * k + carried + (k if all(ahead.values()) else 0)
         parts["manipulations"] = -(-actions // m)
         from_start = [r.from_pose(p) for r, p in zip(relaxed, state.poses)]
         place = _first_places(world, relaxed, from_start, state.carrying, fill)
         parts["first place on every cell to fill"] = _worst(place, fill, world, impossible,
                                                             "no robot can ever place a tile on {}")
-        pick = _last_picks(world, relaxed, from_start, remove)
+        pick = _last_picks(world, from_start, ahead)
         parts["last pick from every cell to empty"] = _worst(pick, remove, world, impossible,
                                                              "no robot can ever pick the tile at {}")
         carry = _transport(world, remove, fill)
@@ -168,15 +168,16 @@ def _first_places(world, relaxed, from_start, carrying, fill) -> np.ndarray:
     return best
 
 
-def _last_picks(world, relaxed, from_start, remove) -> np.ndarray:
-    """Per cell: the earliest step by which a tile picked there can have been set down again."""
+def _last_picks(world, from_start, ahead: dict) -> np.ndarray:
+    """Per cell: the earliest step by which a tile picked there can have been set down again
+    (``ahead``: per graph id, whether its robots pick and place on one cell from a pose)."""
     n = world.width * world.height
     best = np.full(n, INF, dtype=np.int64)
     for i, g in enumerate(world.graphs):
         poses, cells = _by_target(g, Kind.PICK, n)
         reach = from_start[i][poses]
         ok = reach < INF
-        down = 2 + (1 if manipulates_ahead(g) else 0)
+        down = 2 + (1 if ahead[id(g)] else 0)
         np.minimum.at(best, cells[ok], reach[ok] + down)
     return best
 
