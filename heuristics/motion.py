@@ -3,7 +3,7 @@
 Each robot is bound for the poses facing its next leg's cell when that pick or place could
 happen now, else for its goal cell, else it only keeps out of the way; the robots that do not
 manipulate this step then move with Temporal A* windows (:func:`.spacetime.reservation_step`)
-or a cached M* joint plan.
+or a cached joint plan of M* or LaCAM*.
 """
 from __future__ import annotations
 
@@ -13,11 +13,12 @@ import numpy as np
 
 from bille.instances.walking import UNREACHABLE
 
+from . import lacam, mstar
 from .joint import JointProblem
-from .mstar import joint_plan
 from .spacetime import reservation_step
 
 MSTAR_EXPANSIONS = 100_000  # per M* replan: a joint plan that needs more ends the run
+LACAM_NODES = 20_000  # per LaCAM* plan of a replan
 
 
 class Motion:
@@ -88,25 +89,49 @@ class Motion:
             joint[i] = a
         return joint, None
 
-    def _mstar(self, fixed: dict[int, int], goals: list) -> list[int] | None:
-        """The next joint action of the cached M* plan (planned again when the structure, the
-        goals or the poses left it); manipulations replace waits where they fit."""
+    def _lacam(self, problem: JointProblem, fixed: dict[int, int], left: float | None):
+        """A LaCAM* plan to the goals; when the goals cannot all be held at once (a robot's goal
+        pose stands where another must end), the lowest robots in ``Q`` give up their goals for
+        this plan, one at a time, and only keep out of the way."""
+        pinned = {i: self.walk(i).cells(problem.start[i], a) for i, a in fixed.items()}
+        dists = [None if c < 0 else d for c, d in zip(problem.goals, problem.dists)]
+        for drop in [None] + [i for i in reversed(self.Q) if dists[i] is not None]:
+            if drop is not None:
+                dists[drop] = None
+                self.stats["goals_dropped"] += 1
+                problem = JointProblem.towards(self.instance, problem.walks, dists, problem.start)
+            status, steps, stats = lacam.joint_plan(problem, time_limit=left, max_nodes=LACAM_NODES, pinned=pinned)
+            self.stats["expanded"] += stats["nodes"]
+            if steps is not None or status == "timeout":
+                break
+        return status, steps
+
+    def _joint_step(self, fixed: dict[int, int], goals: list, planner: str) -> list[int] | None:
+        """The next joint action of the cached joint plan of ``planner`` (``mstar`` or ``lacam``;
+        planned again when the structure, the goals or the poses left it); manipulations replace
+        waits where they fit."""
         poses = self.state.poses
         key = (self.state.key(), tuple(id(g) for g in goals), tuple(fixed))
         if self._joint_key != key or not self._joint:
             walks = [self.walk(i) for i in range(len(poses))]
-            dists = [g if i not in fixed else walks[i].distances_to(("pose", poses[i]), lambda p=poses[i]: [p])
-                     for i, g in enumerate(goals)]
+            if planner == "lacam":  # a manipulating robot waits one step, then is free
+                dists = [None if i in fixed else g for i, g in enumerate(goals)]
+            else:  # M* keeps a manipulating robot where it is
+                dists = [g if i not in fixed else walks[i].distances_to(("pose", poses[i]), lambda p=poses[i]: [p])
+                         for i, g in enumerate(goals)]
             # a goal out of reach for now (the structure is changing) does not hold the others up
             dists = [None if d is not None and d[p] >= UNREACHABLE else d for d, p in zip(dists, poses)]
             problem = JointProblem.towards(self.instance, walks, dists, poses)
             left = None if self.deadline is None else max(0.1, self.deadline - time.perf_counter())
-            status, steps, stats = joint_plan(problem, epsilon=self.epsilon, time_limit=left,
-                                              max_expansions=MSTAR_EXPANSIONS)
+            if planner == "lacam":
+                status, steps = self._lacam(problem, fixed, left)
+            else:
+                status, steps, stats = mstar.joint_plan(problem, epsilon=self.epsilon, time_limit=left,
+                                                        max_expansions=MSTAR_EXPANSIONS)
+                self.stats["expanded"] += stats["expanded"]
             self.stats["replans"] += 1
-            self.stats["expanded"] += stats["expanded"]
             if steps is None:
-                self.stats["mstar_status"] = status
+                self.stats["joint_status"] = status
                 return None
             self._joint = list(steps) or [tuple(walks[i].wait for i in range(len(poses)))]
         joint = list(self._joint.pop(0))

@@ -56,7 +56,8 @@ from .sequence import Job, NoSequence, sequence_of
 from .temporal_astar import shift_up, timing
 from .transfer import MAX_BACKTRACKS, LoadTransfer
 
-MOTIONS = ("temporal-astar", "mstar")
+MOTIONS = ("temporal-astar", "mstar", "lacam")
+JOINT = {"mstar": "M*", "lacam": "LaCAM*"}  # the motion layers that follow a cached joint plan
 
 
 def plan(instance: Instance, *, motion: str = "temporal-astar", load_transfer: bool = False, d_tr: int = 5,
@@ -126,6 +127,7 @@ class Loop(Allocation, LoadTransfer, Manipulation, Motion):
                             "epsilon": epsilon, "jobs": len(self.jobs), "steps": 0, "relays": 0, "swaps": 0,
                             "pairs_considered": 0, "deferred_manipulations": 0, "priority_shifts": 0,
                             "circle_shifts": 0, "cautious_steps": 0, "replans": 0, "expanded": 0, "backtracks": 0,
+                            "goals_dropped": 0,
                             "plan_ms_mean": 0.0, "plan_ms_max": 0.0}
         self._lists: dict = {}
         self._ready_key, self._ready = None, set()
@@ -191,11 +193,12 @@ class Loop(Allocation, LoadTransfer, Manipulation, Motion):
             seen.add(key)
             fixed, intents = self.manipulations()
             goals = [self.goal(i) for i in range(len(self.legs))]
-            if self.motion == "mstar":
-                joint = self._mstar(fixed, goals)
+            if self.motion in JOINT:
+                joint = self._joint_step(fixed, goals, self.motion)
                 if joint is None:
-                    why = self.stats.get("mstar_status")
-                    return stop(f"M* found no joint plan ({why})", status="timeout" if why == "timeout" else "unsolved")
+                    why = self.stats.get("joint_status")
+                    return stop(f"{JOINT[self.motion]} found no joint plan ({why})",
+                                status="timeout" if why == "timeout" else "unsolved")
             else:
                 joint, blocked = self._temporal(fixed, goals, intents)
                 for _ in range(len(self.Q)):  # a blocked robot moves up in Q (the paper's rule)
@@ -219,7 +222,7 @@ class Loop(Allocation, LoadTransfer, Manipulation, Motion):
                     self.legs[i].pop(0)
             self.steps.append(tuple(joint))
             self.state = nxt
-            if self.motion == "mstar" and not fixed:  # the cached plan holds while it is followed
+            if self.motion in JOINT and not fixed:  # the cached plan holds while it is followed
                 self._joint_key = (nxt.key(), tuple(id(g) for g in goals), ())
             self.stats["steps"] = len(self.steps)
         timing(self.stats, step_times)

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from typing import Callable
 
-from bille.heuristics import astar, mstar, reconfigure, temporal_astar
+from bille.heuristics import astar, lacam, mstar, reconfigure, temporal_astar
 from bille.instances import Instance, OptionError
 from bille.instances.result import Result
 
@@ -47,10 +47,25 @@ def plan_mstar(instance: Instance, *, epsilon: float = 1.0, od: bool = True, tim
     return mstar.plan(instance, epsilon=epsilon, od=od, time_limit=time_limit, max_expansions=max_expansions)
 
 
+def plan_lacam(instance: Instance, *, objective: str = "makespan", time_limit: float | None = None,
+               improve: float = 1.0, max_nodes: int = 2_000_000, seed: int = 0, load_transfer: bool = False,
+               d_tr: int = 5, max_steps: int | None = None) -> Result:
+    """LaCAM* (:func:`bille.heuristics.lacam.plan`); on an instance that moves tiles, the
+    reconfiguration loop with LaCAM* as its motion layer (``load_transfer``, ``d_tr``,
+    ``max_steps`` as for the loop; ``objective``, ``improve``, ``max_nodes`` and ``seed`` are for
+    path planning)."""
+    if instance.is_reconfiguration:
+        return reconfigure.plan(instance, motion="lacam", load_transfer=load_transfer, d_tr=d_tr,
+                                time_limit=time_limit, max_steps=max_steps, method="lacam")
+    return lacam.plan(instance, objective=objective, time_limit=time_limit, improve=improve, max_nodes=max_nodes,
+                      seed=seed)
+
+
 METHODS: dict[str, Callable[..., Result]] = {
     "astar": astar.plan,
     "mstar": plan_mstar,
     "temporal-astar": plan_temporal_astar,
+    "lacam": plan_lacam,
     "cpsat": exact.plan_cpsat,
     "sat": exact.plan_sat,
     "bfs": bfs.plan,

@@ -62,3 +62,32 @@ def optimal_soc(instance, max_states: int = 200_000) -> tuple[int, int] | None:
                     best[key] = (step_cost, t + 1)
                     heapq.heappush(frontier, (step_cost, t + 1, nxt.poses, tuple(sorted(c2)), nxt))
     return None
+
+
+def walking_makespan(instance, max_states: int = 200_000) -> int | None:
+    """Brute-force minimum makespan over walking schedules (no pick or place): a breadth-first
+    search over joint poses, every joint walking action checked by the rules; None when no
+    walking schedule exists."""
+    world, goals = instance.world, instance.goal_cells
+
+    def done(poses):
+        return all(c < 0 or int(world.graphs[i].feet[p, 0]) == c for i, (c, p) in enumerate(zip(goals, poses)))
+
+    start = instance.start_state
+    layer, seen, depth = [start], {start.poses}, 0
+    while layer:
+        if any(done(s.poses) for s in layer):
+            return depth
+        nxt_layer = []
+        for state in layer:
+            options = [[a for a in candidate_actions(instance, state, i)
+                        if world.graphs[i].kind[a] in (Kind.WAIT, Kind.MOTION)] for i in range(instance.num_robots)]
+            for joint in itertools.product(*options):
+                nxt = apply(world, state, joint)
+                if isinstance(nxt, State) and nxt.poses not in seen:
+                    seen.add(nxt.poses)
+                    nxt_layer.append(nxt)
+        if len(seen) > max_states:
+            raise RuntimeError("brute force: too many states")
+        layer, depth = nxt_layer, depth + 1
+    return None

@@ -1,0 +1,153 @@
+"""LaCAM*: complete on a fixed structure, anytime, and the loop's motion layer (every schedule
+goes through the validator; solvability and optima are checked against brute force)."""
+from functools import lru_cache
+from random import Random
+
+import pytest
+
+from bille.instances import InstanceError, load_instance
+from bille.instances.bundled import bundled_path
+from bille.instances.generators.random import crowded
+from bille.solvers import solve, validate
+from helpers import make
+from refsearch import walking_makespan
+from tinyworlds import tiny_instances
+
+STEPS = ((0, -1), (1, 0), (0, 1), (-1, 0))
+
+
+def tiny_path_planning(seed: int):
+    """A random path-planning instance small enough for brute force: 2-3 robots on a few tiles,
+    goals anywhere (some instances have no walking schedule)."""
+    rnd = Random(seed)
+    w, h = rnd.choice([(3, 2), (4, 2), (3, 3), (5, 2), (4, 3)])
+    cells = [(x, y) for y in range(h) for x in range(w)]
+    tiles = set(cells) - set(rnd.sample(cells, rnd.randint(0, 2)))
+    moveset = rnd.choice(["point", "point", "S5", "S7"])
+    robots, used, goals = [], set(), []
+    for _ in range(rnd.randint(2, 3 if moveset == "point" else 2)):  # keeps the brute force fast
+        for _try in range(20):
+            x, y = rnd.choice(sorted(tiles))
+            if moveset == "point":
+                feet, robot = [(x, y)], {"at": [x, y]}
+            else:
+                dx, dy = rnd.choice(STEPS)
+                feet, robot = [(x, y), (x - dx, y - dy)], {"front": [x, y], "back": [x - dx, y - dy]}
+            if all(f in tiles for f in feet) and used.isdisjoint(feet):
+                used.update(feet)
+                robots.append(robot)
+                goals.append(list(rnd.choice(sorted(tiles))) if rnd.random() < 0.8 else None)
+                break
+    grid = "\n".join("".join("T" if (x, y) in tiles else "." for x in range(w)) for y in range(h))
+    try:
+        return make(grid, robots, moveset=moveset, robot_goals=goals, name=f"tiny-path-{seed}")
+    except InstanceError:
+        return None
+
+
+TINY = [inst for inst in map(tiny_path_planning, range(60)) if inst is not None]
+
+
+@lru_cache(maxsize=None)
+def reference(name: str) -> int | None:
+    return walking_makespan(next(inst for inst in TINY if inst.name == name))
+
+
+def checked(inst, **options):
+    result = solve(inst, "lacam", **options)
+    if result.schedule is not None:
+        assert result.status in ("feasible", "optimal") and validate(inst, result.schedule).valid, result.stats
+    return result
+
+
+@pytest.mark.parametrize("inst", TINY, ids=lambda inst: inst.name)
+def test_complete_and_eventually_optimal_on_tiny_instances(inst):
+    best = reference(inst.name)
+    first = checked(inst, improve=0.0)
+    if best is None:  # the whole walking space is searched before it says so
+        assert first.status == "unsolved" and "no walking schedule" in first.stats["failure"]
+        return
+    assert first.schedule is not None and first.metrics.makespan >= best
+    final = checked(inst, improve=1.0)
+    assert final.metrics.makespan <= first.metrics.makespan
+    if final.status == "optimal":  # the search closed: its claim is checked
+        CLOSED.append(inst.name)
+        assert final.metrics.makespan == best
+
+
+CLOSED: list[str] = []
+
+
+def test_the_tiny_instances_include_both_answers_and_closed_searches():
+    answers = {reference(inst.name) is None for inst in TINY}
+    assert answers == {True, False} and len(TINY) >= 40
+    solvable = sum(reference(inst.name) is not None for inst in TINY)
+    assert len(CLOSED) >= solvable // 2  # (runs after the test above, in file order)
+
+
+@pytest.mark.parametrize("name", ["point-4", "compare-2", "compare-3", "compare-4", "compare-5", "compare-6",
+                                  "crowded-2", "crowded-3"])
+def test_solves_every_bundled_path_planning_instance(name):
+    inst = load_instance(bundled_path(name))
+    result = checked(inst, improve=0.0)
+    assert result.status in ("feasible", "optimal")
+    assert result.stats["first_s"] < 1.0 or result.stats["nodes"] < 10_000  # a first schedule, quickly
+
+
+def test_where_the_paper_planner_deadlocks():
+    # two S7 robots swap the ends of a fully tiled 5x2 block
+    swap = make("TTTTT\nTTTTT", [{"front": [1, 0], "back": [0, 0]}, {"front": [3, 1], "back": [4, 1]}],
+                robot_goals=[[4, 1], [0, 0]])
+    # four robots cross a plus-shaped 8x8 structure to the opposite arms
+    plus = make("""
+        ...TT...
+        ...TT...
+        ...TT...
+        TTTTTTTT
+        TTTTTTTT
+        ...TT...
+        ...TT...
+        ...TT...""", [{"front": [3, 1], "back": [3, 0]}, {"front": [6, 3], "back": [7, 3]},
+                      {"front": [4, 6], "back": [4, 7]}, {"front": [1, 4], "back": [0, 4]}],
+                robot_goals=[[3, 7], [0, 3], [4, 0], [7, 4]])
+    for inst in (swap, plus):
+        result = checked(inst, improve=0.0)
+        assert result.status in ("feasible", "optimal"), result.stats
+
+
+@pytest.mark.parametrize("seed", range(100))
+def test_crowded_random_instances_are_solved(seed):
+    robots = 2 + seed % 7
+    w, h = (6, 5) if robots <= 4 else (8, 6)
+    inst = crowded(w, h, robots, seed=seed, moveset=["S7", "S5", "point"][seed % 3])
+    result = checked(inst, improve=0.0)
+    assert result.status in ("feasible", "optimal"), result.stats
+
+
+def test_anytime_improvement_never_makes_it_worse():
+    inst = load_instance(bundled_path("compare-4"))
+    first = checked(inst, improve=0.0)
+    later = checked(inst, improve=2.0)
+    costs = [c for _, c in later.stats["improvements"]]
+    assert costs == sorted(costs, reverse=True) and costs[0] == first.metrics.makespan
+    assert later.metrics.makespan <= first.metrics.makespan
+
+
+def test_sum_of_loss_objective():
+    inst = load_instance(bundled_path("compare-3"))
+    result = checked(inst, objective="sum-of-loss", improve=0.0)
+    assert result.stats["objective"].startswith("sum-of-loss")
+
+
+@pytest.mark.parametrize("inst", [i for i in tiny_instances(36) if i is not None and i.is_reconfiguration],
+                         ids=lambda inst: inst.name)
+def test_the_loop_with_lacam_solves_what_the_paper_loop_solves(inst):
+    # the loop's limits (one robot per job, jobs in order) remain; its motion layer no longer adds any
+    paper = solve(inst, "temporal-astar", time_limit=60, load_transfer=True)
+    result = solve(inst, "lacam", time_limit=60, load_transfer=True)
+    if result.schedule is not None:
+        assert validate(inst, result.schedule).valid
+        best = solve(inst, "bfs", time_limit=60)
+        assert best.status != "optimal" or result.metrics.makespan >= best.metrics.makespan
+    if paper.status == "feasible":
+        assert result.status == "feasible", result.stats
