@@ -6,15 +6,14 @@ from .instance import (
     Robot,
     Task,
     check_instance,
-    dump_instance,
     instance_at,
     instance_from_text,
     load_instance,
-    save_instance,
 )
 from .moveset import Action, Kind, Moveset, load_moveset
 from .posegraph import PoseGraph, compile_posegraph
 from .rules import RULES, State, Violation, World, apply, goal_violation
+from .writing import dump_instance, save_instance
 
 __all__ = [
     "Action", "BilleError", "Grid", "Instance", "InstanceError", "Kind", "Moveset", "MovesetError",

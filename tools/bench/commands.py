@@ -60,7 +60,7 @@ def bench_execute(sizes: str, steps: int, broker: str | None) -> int:
 @click.option("--out", type=click.Path(file_okay=False), default="bench-out", show_default=True,
               help="Folder for planners.csv and planners.png.")
 def bench_planners(time_limit: float, jobs: int | None, maps: str, movesets: str, out: str) -> int:
-    """The paper's planner comparison: A*, M*, Temporal A* on the comparison maps."""
+    """The paper's planner comparison: A*, M*, Temporal A* (and LaCAM*) on the comparison maps."""
     from .planners import default_jobs, plot, run_grid, tables, write_csv
 
     names = [m.strip() for m in maps.split(",") if m.strip()]

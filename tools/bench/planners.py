@@ -26,7 +26,8 @@ MAPS = [f"compare-{m}" for m in range(2, 7)]
 MOVESETS = ("S5", "S7")
 EPSILONS = (1, 2, 3)
 HORIZONS = (2, 5, 8)
-FIELDS = ["map", "robots", "moveset", "method", "epsilon", "horizon", "status", "solved", "makespan",
+LACAM_IMPROVE = (0.0, 1.0)  # LaCAM*: the first schedule, and the best after improving for 1 s
+FIELDS = ["map", "robots", "moveset", "method", "epsilon", "horizon", "improve", "status", "solved", "makespan",
           "tiles_traveled", "sum_of_costs", "time_s"]
 
 
@@ -39,6 +40,8 @@ def configurations(maps=MAPS, movesets=MOVESETS) -> list[dict]:
                 runs.append(dict(map=name, moveset=ms, method="mstar", epsilon=eps, horizon=None))
                 for H in HORIZONS:
                     runs.append(dict(map=name, moveset=ms, method="temporal-astar", epsilon=eps, horizon=H))
+            for improve in LACAM_IMPROVE:
+                runs.append(dict(map=name, moveset=ms, method="lacam", epsilon=None, horizon=None, improve=improve))
     return runs
 
 
@@ -50,9 +53,13 @@ def run_one(config: dict, time_limit: float) -> dict:
 
     inst = load_instance(bundled_path(config["map"]))
     inst = check_instance(dataclasses.replace(inst, moveset=load_moveset(config["moveset"])))
-    options = {"epsilon": float(config["epsilon"]), "time_limit": time_limit}
+    options = {"time_limit": time_limit}
+    if config["epsilon"] is not None:
+        options["epsilon"] = float(config["epsilon"])
     if config["horizon"] is not None:
         options["horizon"] = config["horizon"]
+    if config.get("improve") is not None:
+        options["improve"] = config["improve"]
     result = solve(inst, config["method"], **options)
     m = result.metrics
     return dict(config, robots=inst.num_robots, status=result.status, solved=m is not None,
@@ -78,6 +85,8 @@ def run_grid(time_limit: float, jobs: int, maps=MAPS, movesets=MOVESETS, progres
 
 
 def label(row: dict) -> str:
+    if row["method"] == "lacam":
+        return "LaCAM*(first)" if not row.get("improve") else f"LaCAM*({row['improve']:g} s)"
     name = {"astar": "A*", "mstar": "M*", "temporal-astar": "Temp A*"}[row["method"]]
     eps = f"eps={row['epsilon']}"
     return f"{name}({eps})" if row["horizon"] is None else f"{name}({eps},H={row['horizon']})"
@@ -134,7 +143,8 @@ def plot(rows: list[dict], time_limit: float, path: Path) -> None:
 
     movesets = sorted({r["moveset"] for r in rows})
     labels = list(dict.fromkeys(label(r) for r in rows))
-    family = {"astar": ("Blues", "s"), "mstar": ("Greens", "^"), "temporal-astar": ("Reds", "o")}
+    family = {"astar": ("Blues", "s"), "mstar": ("Greens", "^"), "temporal-astar": ("Reds", "o"),
+              "lacam": ("Purples", "D")}
     style = {}
     for method, (cmap, marker) in family.items():
         mine = [lbl for lbl in labels if any(label(r) == lbl and r["method"] == method for r in rows)]
