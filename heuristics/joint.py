@@ -105,6 +105,9 @@ class JointProblem:
         (DESIGN §3 rule 3; rules 1, 2 and 4 hold for every walking move on a fixed structure)."""
         m = len(options)
         actions, nxt = [0] * m, [0] * m
+        if self.instance.collisions == "classic":
+            yield from self._classic_moves(poses, options)
+            return
 
         def extend(i: int, used: frozenset):
             if i == m:
@@ -114,6 +117,24 @@ class JointProblem:
                 if used.isdisjoint(cells):
                     actions[i], nxt[i] = a, q
                     yield from extend(i + 1, used | cells)
+
+        yield from extend(0, frozenset())
+
+    def _classic_moves(self, poses: Poses, options: list[list]):
+        """Joint actions without vertex or swap conflicts (DESIGN §3 "Classic collisions"; point
+        robots, whose pose is their cell)."""
+        m = len(options)
+        actions, nxt = [0] * m, [0] * m
+
+        def extend(i: int, ends: frozenset):
+            if i == m:
+                yield tuple(actions), tuple(nxt)
+                return
+            for a, q, _ in options[i]:
+                if q in ends or any(nxt[k] == poses[i] and poses[k] == q != poses[i] for k in range(i)):
+                    continue
+                actions[i], nxt[i] = a, q
+                yield from extend(i + 1, ends | {q})
 
         yield from extend(0, frozenset())
 

@@ -113,7 +113,7 @@ class _LaCAM:
         self.deadline = None if time_limit is None else self.start + time_limit
         self.improve, self.max_nodes = improve, max_nodes
         self.rng = random.Random(seed)
-        self.classic = getattr(problem.instance, "collisions", "bille") == "classic"
+        self.classic = problem.instance.collisions == "classic"
         self.generator = _Classic(self) if self.classic else _Bille(self)
         self.stats: dict = {"objective": f"{objective}, walking only (no pick or place)", "nodes": 0,
                             "generated": 0, "improvements": []}
@@ -363,8 +363,10 @@ class _Classic:
 
     def _decide(self, i: int, pusher: int | None) -> bool:
         dist = self.problem.dist_lists[i]
-        ranked = sorted((dist[q], self.rng.random(), k) for k, (_, q, _) in enumerate(self.moves[i]))
-        for _, _, k in ranked:
+        here = self.here
+        ranked = sorted((dist[q], q in here and here[q] != i, self.rng.random(), k)
+                        for k, (_, q, _) in enumerate(self.moves[i]))
+        for *_, k in ranked:
             q = self.moves[i][k][1]
             if q in self.next_at:
                 continue

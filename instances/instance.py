@@ -20,7 +20,7 @@ from .grid import CELL_CHARS, Grid, detached_cells, is_connected
 from .moveset import Moveset, load_moveset
 from .limits import check_size
 from .posegraph import compile_posegraph
-from .rules import State, World
+from .rules import COLLISIONS, State, World
 from .yamlsource import (
     Source,
     expect_bool,
@@ -33,7 +33,7 @@ from .yamlsource import (
 )
 
 XY = tuple[int, int]
-TOP_FIELDS = ("name", "moveset", "grid", "goal", "robots", "robot_goals", "tasks", "meta")
+TOP_FIELDS = ("name", "moveset", "collisions", "grid", "goal", "robots", "robot_goals", "tasks", "meta")
 
 
 @dataclass(frozen=True)
@@ -71,6 +71,7 @@ class Instance:
     robot_goals: tuple[XY | None, ...] | None = None
     tasks: tuple[Task, ...] | None = None
     meta: dict[str, Any] | None = field(default=None, hash=False)
+    collisions: str = "bille"  # or "classic" (DESIGN §3 "Classic collisions", point robots only)
 
     # ---- derived --------------------------------------------------------------------------
 
@@ -104,7 +105,8 @@ class Instance:
         for ms in self.movesets:
             if ms not in graphs:
                 graphs[ms] = compile_posegraph(ms, self.width, self.height, self.start.obstacles)
-        return World(self.width, self.height, self.start.obstacles, tuple(graphs[ms] for ms in self.movesets))
+        return World(self.width, self.height, self.start.obstacles, tuple(graphs[ms] for ms in self.movesets),
+                     classic=self.collisions == "classic")
 
     @cached_property
     def start_state(self) -> State:
@@ -152,6 +154,11 @@ def check_instance(inst: Instance, src: Source | None = None) -> Instance:
         if not is_connected(grid.tiles, w, h):
             _disconnected(grid, "start" if key == "grid" else "goal", src, key)
 
+    if inst.collisions not in COLLISIONS:
+        raise src.fail(("collisions",), f"unknown collision rules '{inst.collisions}' (expected one of: "
+                                        f"{', '.join(COLLISIONS)})")
+    if inst.collisions == "classic" and any(ms.footprint != "point" for ms in inst.movesets):
+        raise src.fail(("collisions",), "classic collisions are for point robots only; a moveset here is a biped")
     owners: dict[XY, int] = {}
     for i, (robot, ms) in enumerate(zip(inst.robots, inst.movesets)):
         for cell, part in _occupied(inst, i, robot, ms, src):
@@ -293,7 +300,8 @@ def parse_instance(data, src: Source, base_dir=None, default_name: str = "instan
     meta = top.get("meta")
     if meta is not None and not isinstance(meta, dict):
         raise src.fail(("meta",), "expected a mapping")
-    return Instance(name, moveset, start, tuple(robots), goal, robot_goals, tasks, meta)
+    collisions = expect_str(top["collisions"], src, ("collisions",)) if "collisions" in top else "bille"
+    return Instance(name, moveset, start, tuple(robots), goal, robot_goals, tasks, meta, collisions)
 
 
 def _moveset(ref, src: Source, path, base_dir) -> Moveset:
@@ -340,4 +348,5 @@ def instance_at(inst: Instance, st: State, name: str) -> Instance:
     for i, r in enumerate(inst.robots):
         feet = inst.world.graphs[i].feet_xy(st.poses[i])
         robots.append(Robot(feet[0], feet[1] if len(feet) > 1 else None, bool(st.carrying[i]), r.moveset))
-    return Instance(name, inst.moveset, grid, tuple(robots), inst.goal_grid, inst.robot_goals)
+    return Instance(name, inst.moveset, grid, tuple(robots), inst.goal_grid, inst.robot_goals,
+                    collisions=inst.collisions)

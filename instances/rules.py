@@ -28,6 +28,7 @@ from .moveset import Kind
 from .posegraph import PoseGraph
 
 RULES = ("precondition", "workspace", "collision", "support", "connectivity", "goal")
+COLLISIONS = ("bille", "classic")  # rule 3, or DESIGN §3 "Classic collisions" (point robots)
 PICK, PLACE = int(Kind.PICK), int(Kind.PLACE)
 
 
@@ -80,6 +81,7 @@ class World:
     height: int
     obstacles: np.ndarray
     graphs: tuple[PoseGraph, ...]
+    classic: bool = False  # DESIGN §3 "Classic collisions" instead of rule 3 (point robots)
     groups: tuple[tuple[PoseGraph, np.ndarray], ...] = field(init=False)
 
     def __post_init__(self) -> None:
@@ -162,14 +164,14 @@ def apply(world: World, state: State, actions: Sequence[int], step: int = 1) -> 
 
     # 3. collision: every cell in at most one collision set
     # (a robot's carried-tile cells may repeat its own feet: deduplicate per robot first)
-    n = world.width * world.height
-    owner = np.repeat(np.arange(world.num_robots), j.coll.shape[1])
-    cells = j.coll.reshape(-1)
-    used = cells >= 0
-    pairs = np.unique(owner[used] * n + cells[used])
-    cells, owner = pairs % n, pairs // n
-    if len(np.unique(cells)) < len(cells):
-        return _collision(world, cells, owner, step)
+    if world.classic:
+        clash = _classic_collision(world, state, j, step)
+        if clash is not None:
+            return clash
+    else:
+        clash = _bille_collision(world, j, step)
+        if clash is not None:
+            return clash
 
     # 4. support
     new_tiles = tiles.copy()
@@ -224,6 +226,53 @@ def goal_violation(world: World, state: State, goal_tiles: np.ndarray, robot_goa
         if cell >= 0 and front != cell:
             return Violation(step, i, "goal", (world.xy(cell),),
                              f"robot {i} ends with its front at {world.xy(front)}, not at its goal {world.xy(cell)}")
+    return None
+
+
+def _bille_collision(world: World, j: _Joint, step: int) -> Violation | None:
+    """Rule 3: the collision sets are pairwise disjoint."""
+    n = world.width * world.height
+    owner = np.repeat(np.arange(world.num_robots), j.coll.shape[1])
+    cells = j.coll.reshape(-1)
+    used = cells >= 0
+    pairs = np.unique(owner[used] * n + cells[used])
+    cells, owner = pairs % n, pairs // n
+    if len(np.unique(cells)) < len(cells):
+        return _collision(world, cells, owner, step)
+    return None
+
+
+def _classic_collision(world: World, state: State, j: _Joint, step: int) -> Violation | None:
+    """Classic collisions (point robots): no two robots end in one cell (vertex conflict) or
+    exchange cells (swap conflict); a pick or place target is no other robot's cell before or
+    after the step, nor another target."""
+    before = np.asarray(state.poses, dtype=np.int64)  # point robots: pose = cell
+    after, target = j.succ, j.target
+    m = world.num_robots
+    who = np.full(world.width * world.height, -1, dtype=np.int64)
+    who[before] = np.arange(m)
+    ahead = who[after]  # the robot standing now where each robot ends
+    swap = (ahead >= 0) & (ahead != np.arange(m)) & (after[np.maximum(ahead, 0)] == before)
+    manipulating = target >= 0
+    if len(np.unique(after)) == m and not swap.any() and not manipulating.any():
+        return None
+    for i in range(m):  # a conflict may exist: find the first pair, to describe it
+        for k in range(i + 1, m):
+            why = None
+            if after[i] == after[k]:
+                why, cells = "end the step in the same cell", [after[i]]
+            elif after[i] == before[k] and after[k] == before[i] and after[i] != before[i]:
+                why, cells = "exchange cells", [before[i], before[k]]
+            else:
+                mine = {int(before[i]), int(after[i])}
+                theirs = {int(before[k]), int(after[k])}
+                hit = [t for t, other in ((target[i], theirs | {int(target[k])}), (target[k], mine | {int(target[i])}))
+                       if t >= 0 and t in other]
+                if hit:
+                    why, cells = "need the same cell for a pick or place", hit[:1]
+            if why is not None:
+                xys = world.xys(cells)
+                return Violation(step, i, "collision", xys, f"robots {i} and {k} {why} at {_fmt(xys)}", other=k)
     return None
 
 

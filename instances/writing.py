@@ -19,6 +19,8 @@ if TYPE_CHECKING:
 def dump_instance(inst: Instance) -> str:
     """The canonical YAML text of an instance (``load(dump(x)) == x``)."""
     out = [f"name: {_scalar(inst.name)}", f"moveset: {_scalar(inst.moveset.ref or inst.moveset.name)}"]
+    if inst.collisions != "bille":
+        out.append(f"collisions: {inst.collisions}")
     out += _block("grid", inst.start)
     if inst.goal is not None:
         out += _block("goal", inst.goal)

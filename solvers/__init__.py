@@ -15,7 +15,7 @@ from bille.instances.schedule import Schedule, bind, dump_schedule, load_schedul
 
 from .bounds import Bounds, lower_bound
 from .options import check_options
-from .registry import METHODS
+from .registry import CLASSIC, METHODS
 from .validate import Report, validate
 
 
@@ -37,6 +37,9 @@ def solve(instance: Instance, method: str, **options) -> Result:
     if method not in METHODS:
         raise OptionError(f"unknown method '{method}' (expected one of: {', '.join(METHODS)})")
     plan = METHODS[method]
+    if instance.collisions == "classic" and method not in CLASSIC:
+        raise OptionError(f"instance '{instance.name}' uses classic collisions; {method} plans under the Bill-E "
+                          f"rule only (classic: {', '.join(CLASSIC)})")
     options = check_options(method, plan, options, internal=("bounds",))
     start = _time.perf_counter()
     bounds = lower_bound(instance)

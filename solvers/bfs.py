@@ -8,6 +8,7 @@ tested against, not a planner.
 from __future__ import annotations
 
 import time
+from itertools import product
 
 import numpy as np
 
@@ -90,7 +91,8 @@ def plan(instance: Instance, *, time_limit: float | None = None, max_steps: int 
                               time_s=time.perf_counter() - start)
             expanded += 1
             options = [candidate_actions(instance, s, i) for i in range(instance.num_robots)]
-            for joint in _disjoint_products(instance, s, options):
+            joints = product(*options) if world.classic else _disjoint_products(instance, s, options)
+            for joint in joints:
                 new = apply(world, s, joint)
                 if isinstance(new, State):
                     key = new.key()

@@ -55,11 +55,16 @@ def plan_lacam(instance: Instance, *, objective: str = "makespan", time_limit: f
     ``max_steps`` as for the loop; ``objective``, ``improve``, ``max_nodes`` and ``seed`` are for
     path planning)."""
     if instance.is_reconfiguration:
+        if instance.collisions == "classic":
+            raise OptionError(f"lacam: instance '{instance.name}' moves tiles under classic collisions; "
+                              "the reconfiguration loop plans under the Bill-E rule only")
         return reconfigure.plan(instance, motion="lacam", load_transfer=load_transfer, d_tr=d_tr,
                                 time_limit=time_limit, max_steps=max_steps, method="lacam")
     return lacam.plan(instance, objective=objective, time_limit=time_limit, improve=improve, max_nodes=max_nodes,
                       seed=seed)
 
+
+CLASSIC = ("astar", "lacam", "bfs")  # the methods that plan under classic collisions (DESIGN §3)
 
 METHODS: dict[str, Callable[..., Result]] = {
     "astar": astar.plan,

@@ -8,9 +8,11 @@ from bille.solvers import schedule_from_text
 
 
 def make(grid: str, robots: list[dict], *, goal: str | None = None, moveset: str = "S7",
-         robot_goals=None, name: str = "test"):
+         robot_goals=None, name: str = "test", collisions: str | None = None):
     """An instance from a drawn grid (leading/trailing blank lines and indentation removed)."""
     lines = [f"name: {name}", f"moveset: {moveset}", "grid: |"] + ["  " + r for r in _rows(grid)]
+    if collisions is not None:
+        lines.append(f"collisions: {collisions}")
     if goal is not None:
         lines += ["goal: |"] + ["  " + r for r in _rows(goal)]
     lines.append("robots: " + json.dumps(robots))

@@ -127,8 +127,12 @@ def test_movingai_map_and_scenario(tmp_path):
     assert [r.front for r in inst.robots] == [(0, 0), (5, 0)]
     assert inst.robot_goals == ((5, 3), (0, 2))
     assert inst.moveset.name == "point" and int(inst.start.obstacles.sum()) == 5
-    result = solve(inst, "cpsat", time_limit=60)
+    assert inst.collisions == "classic" and inst.meta["agents"] == 2 and inst.meta["scenario"].endswith("m.scen")
+    result = solve(inst, "lacam", time_limit=60)
     assert result.status == "optimal" and validate(inst, result.schedule).valid
+    bille = from_movingai(tmp_path / "m.map", tmp_path / "m.scen", agents=2, collisions="bille")
+    result = solve(bille, "cpsat", time_limit=60)
+    assert result.status == "optimal" and validate(bille, result.schedule).valid
     with pytest.raises(InstanceError, match="only 2 agents"):
         from_movingai(tmp_path / "m.map", tmp_path / "m.scen", agents=3)  # the third row starts on a 'T'
 

@@ -18,7 +18,8 @@ STEPS = ((0, -1), (1, 0), (0, 1), (-1, 0))
 
 def tiny_path_planning(seed: int):
     """A random path-planning instance small enough for brute force: 2-3 robots on a few tiles,
-    goals anywhere (some instances have no walking schedule)."""
+    goals anywhere (some instances have no walking schedule); point robots under either
+    collision rule."""
     rnd = Random(seed)
     w, h = rnd.choice([(3, 2), (4, 2), (3, 3), (5, 2), (4, 3)])
     cells = [(x, y) for y in range(h) for x in range(w)]
@@ -39,8 +40,9 @@ def tiny_path_planning(seed: int):
                 goals.append(list(rnd.choice(sorted(tiles))) if rnd.random() < 0.8 else None)
                 break
     grid = "\n".join("".join("T" if (x, y) in tiles else "." for x in range(w)) for y in range(h))
+    collisions = "classic" if moveset == "point" and rnd.random() < 0.5 else None
     try:
-        return make(grid, robots, moveset=moveset, robot_goals=goals, name=f"tiny-path-{seed}")
+        return make(grid, robots, moveset=moveset, robot_goals=goals, name=f"tiny-path-{seed}", collisions=collisions)
     except InstanceError:
         return None
 

@@ -93,12 +93,14 @@ def gen_corridor(length, robots, room, moved, moveset, seed, output, as_json) ->
 @click.argument("map_file", metavar="MAP")
 @click.argument("scen", required=False)
 @click.option("--agents", "-k", type=int, required=True, help="Number of robots.")
+@click.option("--collisions", type=click.Choice(["classic", "bille"]), default="classic", show_default=True,
+              help="Classic MAPF collisions (following allowed) or the Bill-E rule (DESIGN §3).")
 @common
-def gen_movingai(map_file, scen, agents, seed, output, as_json) -> int:
+def gen_movingai(map_file, scen, agents, collisions, seed, output, as_json) -> int:
     """A MovingAI .map (+ .scen) as point robots on an all-tile structure."""
     from bille.instances.generators.movingai import from_movingai
 
-    return _output(from_movingai(map_file, scen, agents=agents, seed=seed), output, as_json)
+    return _output(from_movingai(map_file, scen, agents=agents, seed=seed, collisions=collisions), output, as_json)
 
 
 def _graph(graph_file, vertices, seed):

@@ -4,7 +4,8 @@ A ``.map`` file (``type octile``, ``height H``, ``width W``, ``map``, then H row
 whose passable cells (``.``, ``G``, ``S``) are tiles and whose other cells (``@``, ``O``, ``T``,
 ``W``) are obstacles; only the largest 4-connected part of the passable cells stays tiles (the
 structure must be connected), the rest become empty cells. Robots use the ``point`` footprint,
-so the instance is classic MAPF on a 4-connected grid. Agents come from a ``.scen`` file (its
+so the instance is classic MAPF on a 4-connected grid (``collisions: classic``, DESIGN §3, unless
+asked for the Bill-E rule). Agents come from a ``.scen`` file (its
 rows in order, skipping those whose start or goal is outside the kept part or already used) or,
 without one, are drawn at random with the seed.
 """
@@ -79,8 +80,9 @@ def read_scen(path: str | Path) -> list[tuple[tuple[int, int], tuple[int, int]]]
 
 
 def from_movingai(map_path: str | Path, scen_path: str | Path | None = None, *, agents: int,
-                  seed: int = 0, name: str | None = None) -> Instance:
-    """An instance of ``agents`` point robots on the map (see the module docstring)."""
+                  seed: int = 0, name: str | None = None, collisions: str = "classic") -> Instance:
+    """An instance of ``agents`` point robots on the map (see the module docstring), under
+    ``collisions``: ``classic`` (the benchmark's own rules, the default) or ``bille``."""
     if agents < 1:
         raise InstanceError(f"--agents must be at least 1, got {agents}")
     width, height, passable = read_map(map_path)
@@ -91,11 +93,13 @@ def from_movingai(map_path: str | Path, scen_path: str | Path | None = None, *, 
     inside = lambda xy: 0 <= xy[0] < width and 0 <= xy[1] < height and tiles[xy[1] * width + xy[0]]  # noqa: E731
     pairs: list = []
     if scen_path is not None:
-        used: set = set()
-        for s, g in read_scen(scen_path):
-            if inside(s) and inside(g) and s not in used and g not in used and len(pairs) < agents:
+        starts: set = set()
+        goals: set = set()
+        for s, g in read_scen(scen_path):  # as the benchmark means it: starts apart, goals apart
+            if inside(s) and inside(g) and s not in starts and g not in goals and len(pairs) < agents:
                 pairs.append((s, g))
-                used |= {s, g}
+                starts.add(s)
+                goals.add(g)
         source = str(scen_path)
     else:
         rnd = random.Random(seed)
@@ -109,8 +113,8 @@ def from_movingai(map_path: str | Path, scen_path: str | Path | None = None, *, 
                             f"largest connected part ({int(tiles.sum())} cells; {source}), {agents} asked")
     grid = Grid.from_masks(width, height, ~passable, tiles)
     inst = Instance(name or Path(map_path).stem, load_moveset("point"), grid, tuple(Robot(s) for s, _ in pairs),
-                    robot_goals=tuple(g for _, g in pairs),
-                    meta={"generator": "movingai", "map": Path(map_path).name, "agents": source})
+                    robot_goals=tuple(g for _, g in pairs), collisions=collisions,
+                    meta={"generator": "movingai", "map": Path(map_path).name, "agents": agents, "scenario": source})
     return check_instance(inst)
 
 

@@ -165,3 +165,54 @@ def bench_crowd(size: int, robots: int, horizon: int, seed: int) -> int:
     for line in run(size, robots, horizon, seed):
         click.echo(line)
     return EXIT_OK
+
+
+@bench.command("mapf")
+@click.option("--folder", type=click.Path(file_okay=False, exists=True), default="../shared/movingai",
+              show_default=True, help="Folder of MovingAI .map files and their -random-1.scen scenarios.")
+@click.option("--maps", default="random-32-32-10,room-32-32-4,warehouse-10-20-10-2-1", show_default=True)
+@click.option("--agents", default="50,100,200,300,400", show_default=True, help="Comma-separated agent counts.")
+@click.option("--time-limit", type=click.FloatRange(min=0.1), default=60.0, show_default=True)
+@click.option("--improve", type=click.FloatRange(min=0), default=0.0, show_default=True,
+              help="Seconds LaCAM* improves its first schedule.")
+def bench_mapf(folder: str, maps: str, agents: str, time_limit: float, improve: float) -> int:
+    """Classic MAPF on MovingAI maps: LaCAM*'s success, sum of costs, makespan and time."""
+    from pathlib import Path
+
+    from .mapf import mapf_rows, mapf_table
+
+    counts = _counts(agents, "--agents")
+    rows = []
+    for row in mapf_rows(Path(folder), [m.strip() for m in maps.split(",") if m.strip()], counts, time_limit, improve):
+        rows.append(row)
+        click.echo(f"{row['map']} {row['agents']} agents: {row['status']} {row.get('reason', '')}".rstrip(), err=True)
+    for line in mapf_table(rows):
+        click.echo(line)
+    return EXIT_OK
+
+
+@bench.command("lacam")
+@click.option("--size", type=click.IntRange(8, 512), default=64, show_default=True)
+@click.option("--robots", default="50,100,200", show_default=True, help="Comma-separated robot counts.")
+@click.option("--seed", type=int, default=0, show_default=True)
+def bench_lacam(size: int, robots: str, seed: int) -> int:
+    """LaCAM* at scale: S7 robots with random goals on a fully tiled square, time to a first schedule."""
+    from .mapf import scale_rows
+
+    click.echo(f"LaCAM* on a fully tiled {size}x{size} square, S7 robots, random goal cells (seed {seed}); "
+               "target: first schedule within 10 s for 200 robots")
+    for r in scale_rows(size, _counts(robots, "--robots"), seed):
+        first = "-" if r["first_s"] is None else f"{r['first_s']:.2f} s"
+        click.echo(f"  {r['robots']:>4} robots: {r['status']}, first schedule after {first}, makespan "
+                   f"{r['makespan']}, {r['nodes']} configurations, total {r['time_s']:.2f} s")
+    return EXIT_OK
+
+
+def _counts(text: str, option: str) -> list[int]:
+    try:
+        counts = [int(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise click.BadParameter(f"expected comma-separated whole numbers, got {text!r}", param_hint=option) from None
+    if not counts or min(counts) < 1:
+        raise click.BadParameter(f"expected positive counts, got {text!r}", param_hint=option)
+    return counts

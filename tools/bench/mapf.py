@@ -1,0 +1,115 @@
+"""Classic MAPF on MovingAI benchmarks (``bille bench mapf``), and LaCAM* at scale (``bille bench
+lacam``).
+
+MAPF: each map with its ``random-1`` scenario, the first ``k`` agents for growing ``k``, under
+classic collisions (DESIGN §3), solved by ``lacam``: success, sum of costs (each agent's last
+arrival at its goal), makespan and time. The baseline of the same run is the sum of the agents'
+shortest-path lengths, a lower bound on the sum of costs: the ratio says how far above it the
+schedule is.
+
+Scale: S7 robots with random goal cells on a fully tiled square: time to the first schedule.
+"""
+from __future__ import annotations
+
+import random
+from pathlib import Path
+
+import numpy as np
+
+from bille.instances import Grid, Instance, InstanceError, Robot, check_instance, load_moveset
+from bille.instances.generators.movingai import from_movingai
+from bille.instances.schedule import bind
+from bille.instances.walking import walk_for
+from bille.solvers import solve
+
+from ..tables import text_table
+
+MAPS = ("random-32-32-10", "room-32-32-4", "warehouse-10-20-10-2-1")
+AGENTS = (50, 100, 200, 300, 400)
+
+
+def sum_of_costs(instance: Instance, schedule) -> int:
+    """Each robot's cost is the step after which it stands on its goal for good (0 if it never
+    leaves it); robots without a goal cost nothing."""
+    world, total = instance.world, 0
+    for i, row in enumerate(bind(instance, schedule)):
+        goal, g = instance.goal_cells[i], world.graphs[i]
+        if goal < 0:
+            continue
+        pose = instance.start_state.poses[i]
+        arrival = 0 if int(g.feet[pose, 0]) == goal else 1  # the step after which it stays there
+        for t, a in enumerate(row.tolist(), start=1):
+            pose = int(g.succ[pose, a])
+            if int(g.feet[pose, 0]) != goal:
+                arrival = t + 1
+        total += arrival
+    return total
+
+
+def lower_soc(instance: Instance) -> int:
+    """The summed shortest-path lengths of the robots alone: a lower bound on the sum of costs."""
+    tiles, total = instance.start.tiles, 0
+    for i, (g, pose) in enumerate(zip(instance.world.graphs, instance.start_state.poses)):
+        if instance.goal_cells[i] >= 0:
+            total += int(walk_for(g, tiles).distances(instance.goal_cells[i])[pose])
+    return total
+
+
+def mapf_rows(folder: Path, maps=MAPS, agents=AGENTS, time_limit: float = 60.0, improve: float = 0.0):
+    """Yield one result row per map and agent count, as soon as it is measured."""
+    for name in maps:
+        map_file, scen = folder / f"{name}.map", folder / f"{name}-random-1.scen"
+        for k in agents:
+            try:
+                inst = from_movingai(map_file, scen, agents=k)
+            except InstanceError as exc:  # the scenario has fewer agents on this map
+                yield dict(map=name, agents=k, status="skipped", reason=str(exc))
+                continue
+            result = solve(inst, "lacam", time_limit=time_limit, improve=improve)
+            row = dict(map=name, agents=k, status=result.status, time_s=result.time_s,
+                       first_s=result.stats.get("first_s"), lower=lower_soc(inst))
+            if result.schedule is not None:
+                row.update(soc=sum_of_costs(inst, result.schedule), makespan=result.metrics.makespan)
+            yield row
+
+
+def mapf_table(rows: list[dict]) -> list[str]:
+    table = []
+    for r in rows:
+        solved = "soc" in r
+        table.append([r["map"], str(r["agents"]), r["status"],
+                      str(r["soc"]) if solved else "-", str(r["lower"]) if "lower" in r else "-",
+                      f"{r['soc'] / r['lower']:.3f}" if solved and r.get("lower") else "-",
+                      str(r["makespan"]) if solved else "-",
+                      f"{r['first_s']:.3f}" if r.get("first_s") is not None else "-",
+                      f"{r['time_s']:.2f}" if "time_s" in r else "-"])
+    columns = ["map", "agents", "status", "sum of costs", "SOC lower bound", "ratio", "makespan",
+               "first [s]", "total [s]"]
+    return text_table(columns, table, right=set(columns[1:]) - {"status"})
+
+
+def full_square(size: int, robots: int, seed: int = 0) -> Instance:
+    """``robots`` S7 robots (heading north) on a fully tiled ``size`` square, random goal cells."""
+    rnd = random.Random(seed)
+    n = size * size
+    tiles = np.ones(n, dtype=bool)
+    grid = Grid.from_masks(size, size, np.zeros(n, dtype=bool), tiles)
+    placed, used = [], set()
+    if 2 * robots > n:
+        raise InstanceError(f"{robots} robots do not fit on a {size}x{size} square")
+    while len(placed) < robots:
+        x, y = rnd.randrange(size), rnd.randrange(size - 1)
+        if not {(x, y), (x, y + 1)} & used:
+            placed.append(Robot((x, y), (x, y + 1)))
+            used |= {(x, y), (x, y + 1)}
+    goals = tuple(grid.xy(c) for c in rnd.sample(range(n), robots))
+    return check_instance(Instance(f"square-{size}-{robots}", load_moveset("S7"), grid, tuple(placed),
+                                   robot_goals=goals))
+
+
+def scale_rows(size: int, robot_counts, seed: int = 0):
+    for robots in robot_counts:
+        inst = full_square(size, robots, seed)
+        result = solve(inst, "lacam", improve=0.0, time_limit=120)
+        yield dict(robots=robots, status=result.status, first_s=result.stats.get("first_s"), time_s=result.time_s,
+                   makespan=result.metrics.makespan if result.metrics else None, nodes=result.stats.get("nodes"))
