@@ -104,6 +104,38 @@ def joint_plan(problem: JointProblem, *, objective: str = "makespan", time_limit
     return _LaCAM(problem, objective, time_limit, improve, max_nodes, seed, pinned or {}).run()
 
 
+def next_configuration(walks: list, dist_lists: list[list[int]], config: Poses, order: list[int],
+                       pinned: dict[int, frozenset], rng: random.Random,
+                       wants: dict[int, frozenset] | None = None) -> tuple[tuple[int, ...], Poses]:
+    """One free step of the configuration generator (PIBT for collision sets, module docstring):
+    robots on ``walks`` at ``config``, each drawn towards lower ``dist_lists[i]``, decided in
+    ``order``; ``pinned`` robots wait holding the given cells; ``wants``: robots that wait for
+    the given cells, whose occupants are pushed off them first. Returns ``(joint action, next
+    poses)``; never fails (waiting is always free) unless the pinned cells overlap."""
+    step = _Step(walks, dist_lists)
+    got = _Bille(_Search(step, rng)).generate(config, order, (), pinned, wants)
+    if got is None:
+        raise ValueError("pinned cells overlap another robot")
+    return got
+
+
+@dataclass
+class _Step:
+    """The part of a :class:`JointProblem` the generator reads, built from ready lists."""
+
+    walks: list
+    dist_lists: list
+
+    def moves(self, i: int, pose: int):
+        return self.walks[i].moves(pose)
+
+
+@dataclass
+class _Search:
+    problem: _Step
+    rng: random.Random
+
+
 class _LaCAM:
     def __init__(self, problem: JointProblem, objective, time_limit, improve, max_nodes, seed, pinned) -> None:
         self.problem, self.pinned = problem, pinned
@@ -259,8 +291,8 @@ class _Bille:
     def __init__(self, search: _LaCAM) -> None:
         self.problem, self.rng = search.problem, search.rng
 
-    def generate(self, config: Poses, order: list[int], forced: tuple,
-                 pinned: dict[int, frozenset]) -> tuple[tuple[int, ...], Poses] | None:
+    def generate(self, config: Poses, order: list[int], forced: tuple, pinned: dict[int, frozenset],
+                 wants: dict[int, frozenset] | None = None) -> tuple[tuple[int, ...], Poses] | None:
         problem = self.problem
         m = len(config)
         self.config = config
@@ -285,6 +317,12 @@ class _Bille:
                 return None
             self._claim(i, k)
         self.active: set[int] = set()
+        for i, cells in (wants or {}).items():  # a robot waiting to manipulate pushes those in the way
+            if self.choice[i] is None:
+                self._claim(i, 0)
+            for j in sorted({self.owner[c] for c in cells if self.owner.get(c, i) != i}):
+                if self.choice[j] is None:
+                    self._decide(j, frozenset(cells))
         for i in order:
             if self.choice[i] is None:
                 self._decide(i, None)
@@ -307,11 +345,11 @@ class _Bille:
         ranked = []
         for k, (a, q, cells) in enumerate(self.moves[i]):
             stays = avoid is not None and not avoid.isdisjoint(walk.moves(q)[0][2])
-            ranked.append((stays, dist[q], self.rng.random(), k))
+            ranked.append((stays, dist[q], k != 0, self.rng.random(), k))  # ties: rather wait
         ranked.sort()
         here = dist[self.config[i]]
         pushed = False
-        for stays, d, _, k in ranked:
+        for stays, d, _, _, k in ranked:
             cells = self.moves[i][k][2]
             if any(c in self.taken for c in cells):
                 continue

@@ -11,14 +11,15 @@ import time
 
 import numpy as np
 
-from bille.instances.walking import UNREACHABLE
+from bille.instances.moveset import Kind
+from bille.instances.walking import UNREACHABLE, walk_for
 
 from . import lacam, mstar
 from .joint import JointProblem
 from .spacetime import reservation_step
 
 MSTAR_EXPANSIONS = 100_000  # per M* replan: a joint plan that needs more ends the run
-LACAM_NODES = 20_000  # per LaCAM* plan of a replan
+LACAM_NODES = 2_000  # per LaCAM* plan of a replan (a goal set that needs more is relaxed)
 
 
 class Motion:
@@ -30,7 +31,10 @@ class Motion:
         if self.legs[i]:
             if i not in self.ready():
                 return None  # its pick or place cannot happen yet: give way meanwhile
-            return walk.facing_distances(self.legs[i][0].cell)
+            leg = self.legs[i][0]
+            if leg.kind == Kind.PICK and len(self.legs[i]) > 1 and self.legs[i][1].kind == Kind.PLACE:
+                return self._pick_towards(walk, i, leg.cell, self.legs[i][1].cell)
+            return walk.facing_distances(leg.cell)
         if self.goal_cells[i] >= 0:
             return walk.distances(self.goal_cells[i])
         needed = self._pending_picks()
@@ -41,6 +45,21 @@ class Motion:
 
             return walk.distances_to(("clear", frozenset(needed)), clear)
         return None
+
+    def _pick_towards(self, walk, i: int, pick: int, place: int) -> np.ndarray:
+        """Distances to the poses facing ``pick`` from which the tile, once picked, can be
+        carried to a pose facing ``place`` (a pose facing the pick on the far side of a gap may
+        have no way round with the tile). All poses facing the pick if none can."""
+        rest = self.state.tiles.copy()
+        rest[pick] = False
+        carry = walk_for(self.world.graphs[i], rest, carrying=True).facing_distances(place)
+
+        def sources():
+            facing = walk.facing_poses(pick)
+            able = facing[carry[facing] < UNREACHABLE]
+            return able if len(able) else facing
+
+        return walk.distances_to(("pick", pick, place), sources)
 
     def _as_lists(self, dist: np.ndarray | None):
         if dist is None:
@@ -89,18 +108,47 @@ class Motion:
             joint[i] = a
         return joint, None
 
+    def _pibt(self, fixed: dict[int, int], goals: list, intents: dict[int, frozenset]) -> list[int]:
+        """One step of LaCAM*'s configuration generator towards the current goals (no joint
+        plan): robots in the order of their LaCAM priorities (a robot away from its goal gains
+        one every step), a manipulating robot pinned to its manipulation's cells, a robot with
+        an intent waiting while the robots on its manipulation's cells are pushed off."""
+        poses = self.state.poses
+        walks = [self.walk(i) for i in range(len(poses))]
+        lists = []
+        for i, g in enumerate(goals):
+            dist = None if i in fixed else self._as_lists(g)[0]
+            if dist is None or dist[poses[i]] >= UNREACHABLE:
+                size = walks[i].succ.shape[0]
+                dist = self._zeros.setdefault(size, [0] * size)
+            lists.append(dist)
+        self._priority = [v + 1 if d[p] > 0 else v - int(v) for v, d, p in zip(self._priority, lists, poses)]
+        order = sorted(range(len(poses)), key=lambda i: -self._priority[i])
+        pinned = {i: walks[i].cells(poses[i], a) for i, a in fixed.items()}
+        joint, _ = lacam.next_configuration(walks, lists, poses, order, pinned, self._rng, intents)
+        joint = list(joint)
+        for i, a in fixed.items():
+            joint[i] = a
+        return joint
+
     def _lacam(self, problem: JointProblem, fixed: dict[int, int], left: float | None):
-        """A LaCAM* plan to the goals; when the goals cannot all be held at once (a robot's goal
-        pose stands where another must end), the lowest robots in ``Q`` give up their goals for
-        this plan, one at a time, and only keep out of the way."""
+        """A LaCAM* plan that brings every robot to its goal at once; when none is found within
+        :data:`LACAM_NODES` configurations (the goals may not all be held at once: one robot's
+        goal pose stands where another must end), a plan for one robot alone while the others
+        only make way, the robots taken in turn from ``Q`` (one further at every replan)."""
         pinned = {i: self.walk(i).cells(problem.start[i], a) for i, a in fixed.items()}
         dists = [None if c < 0 else d for c, d in zip(problem.goals, problem.dists)]
-        for drop in [None] + [i for i in reversed(self.Q) if dists[i] is not None]:
-            if drop is not None:
-                dists[drop] = None
-                self.stats["goals_dropped"] += 1
-                problem = JointProblem.towards(self.instance, problem.walks, dists, problem.start)
-            status, steps, stats = lacam.joint_plan(problem, time_limit=left, max_nodes=LACAM_NODES, pinned=pinned)
+        status, steps, stats = lacam.joint_plan(problem, time_limit=left, max_nodes=LACAM_NODES, pinned=pinned)
+        self.stats["expanded"] += stats["nodes"]
+        if steps is not None or status == "timeout":
+            return status, steps
+        movers = [i for i in self.Q if dists[i] is not None and dists[i][problem.start[i]] > 0]
+        self._turn += 1
+        for i in movers[self._turn % len(movers):] + movers[:self._turn % len(movers)] if movers else []:
+            self.stats["goals_dropped"] += len(movers) - 1
+            alone = [d if k == i else None for k, d in enumerate(dists)]
+            one = JointProblem.towards(self.instance, problem.walks, alone, problem.start)
+            status, steps, stats = lacam.joint_plan(one, time_limit=left, max_nodes=5 * LACAM_NODES, pinned=pinned)
             self.stats["expanded"] += stats["nodes"]
             if steps is not None or status == "timeout":
                 break

@@ -38,6 +38,7 @@ robots are going round in circles after spending the budget of priority shifts; 
 """
 from __future__ import annotations
 
+import random
 import time
 
 import numpy as np
@@ -139,6 +140,11 @@ class Loop(Allocation, LoadTransfer, Manipulation, Motion):
         self.tabu: set[tuple] = set()  # transfers that led into a deadlock: never again
         self._checkpoints: list[tuple] = []  # the loop's state before each step with transfers
         self._joint: list | None = None  # the cached M* plan: remaining joint actions
+        self._priority = [0.0] * m  # LaCAM* motion: the generator's priorities
+        self._rng = random.Random(0)
+        self._zeros: dict[int, list[int]] = {}  # distance lists of robots without a goal
+        self._escape = False  # LaCAM* motion: follow a joint plan out of a circle
+        self._turn = 0  # LaCAM* motion: whose goal a one-robot joint plan serves next
         self._joint_key = None  # the state, goals and manipulations the cached plan expects next
 
     # ---- the world as the robots see it -----------------------------------------------------
@@ -189,11 +195,17 @@ class Loop(Allocation, LoadTransfer, Manipulation, Motion):
                 shift_up(self.Q, busy[-1])
                 self.stats["priority_shifts"] += 1
                 self.stats["circle_shifts"] += 1
-                continue
+                if self.motion != "lacam" or self._escape:
+                    continue
+                self._escape = True  # LaCAM* motion: out of the circle along a joint plan, now
             seen.add(key)
             fixed, intents = self.manipulations()
             goals = [self.goal(i) for i in range(len(self.legs))]
-            if self.motion in JOINT:
+            free_step = self.motion == "lacam" and not self._escape
+            if free_step:
+                joint = self._pibt(fixed, goals, intents)
+                self._joint = None  # a joint plan, when needed again, starts from here
+            elif self.motion in JOINT:
                 joint = self._joint_step(fixed, goals, self.motion)
                 if joint is None:
                     why = self.stats.get("joint_status")
@@ -220,9 +232,10 @@ class Loop(Allocation, LoadTransfer, Manipulation, Motion):
             for i, a in fixed.items():
                 if joint[i] == a:
                     self.legs[i].pop(0)
+                    self._escape = False  # progress: LaCAM* motion takes free steps again
             self.steps.append(tuple(joint))
             self.state = nxt
-            if self.motion in JOINT and not fixed:  # the cached plan holds while it is followed
+            if self.motion in JOINT and not fixed and not free_step:  # the cached plan holds while it is followed
                 self._joint_key = (nxt.key(), tuple(id(g) for g in goals), ())
             self.stats["steps"] = len(self.steps)
         timing(self.stats, step_times)
