@@ -14,7 +14,7 @@ import numpy as np
 from bille.instances.moveset import Kind
 from bille.instances.walking import UNREACHABLE, walk_for
 
-from . import lacam, mstar
+from . import lacam, mstar, pibt
 from .joint import JointProblem
 from .spacetime import reservation_step
 
@@ -125,7 +125,7 @@ class Motion:
         self._priority = [v + 1 if d[p] > 0 else v - int(v) for v, d, p in zip(self._priority, lists, poses)]
         order = sorted(range(len(poses)), key=lambda i: -self._priority[i])
         pinned = {i: walks[i].cells(poses[i], a) for i, a in fixed.items()}
-        joint, _ = lacam.next_configuration(walks, lists, poses, order, pinned, self._rng, intents)
+        joint, _ = pibt.next_configuration(walks, lists, poses, order, pinned, self._rng, intents)
         joint = list(joint)
         for i, a in fixed.items():
             joint[i] = a
