@@ -11,7 +11,7 @@ import numpy as np
 from bille.instances.moveset import Kind
 
 from .legs import Leg
-from .sequence import apply_move
+from .sequence import Job, apply_move
 
 
 class Manipulation:
@@ -120,3 +120,31 @@ class Manipulation:
             taken |= cells
         return out, intents
 
+    def drop(self) -> dict[int, int]:
+        """A temporary placement: a carrying robot that cannot get on (no joint plan brings it to
+        its place) puts its tile down where it stands, on a free cell that no pending job uses,
+        if the structure and the rest of the sequence stay valid; the rest of its job (pick the
+        tile up again, place it) becomes the next job to hand out. Returns ``{robot: place
+        action}`` for this step, or nothing. At most ``len(jobs)`` drops per run."""
+        if self.stats["drops"] >= self.max_drops:
+            return {}
+        tiles, pending, k = self.state.tiles, self._pending_cells(), self.next_job
+        for i in reversed(self.Q):
+            legs = self.legs[i]
+            if not (self.state.carrying[i] and len(legs) == 1 and legs[0].kind == Kind.PLACE):
+                continue
+            walk, pose = self.walk(i), self.state.poses[i]
+            busy = self._occupied_cells(but=i)
+            for c in walk.graph.target[pose].tolist():
+                action = walk.manipulation(pose, c, Kind.PLACE) if c >= 0 else None
+                if action is None or tiles[c] or c in pending or not walk.cells(pose, action).isdisjoint(busy):
+                    continue
+                before = (self.jobs, self.legs[i])
+                self.jobs = self.jobs[:k] + [Job(c, legs[0].cell)] + self.jobs[k:]
+                self.legs[i] = [Leg(Kind.PLACE, c, legs[0].job)]
+                if self._allowed(tiles, self.legs[i][0], [op for op in self._pending_ops() if op[3] != (i, self.legs[i][0])]) is not None:
+                    self.stats["drops"] += 1
+                    self._ready_key = None
+                    return {i: action}
+                self.jobs, self.legs[i] = before
+        return {}

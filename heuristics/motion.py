@@ -149,7 +149,7 @@ class Motion:
             alone = [d if k == i else None for k, d in enumerate(dists)]
             one = JointProblem.towards(self.instance, problem.walks, alone, problem.start)
             left = None if self.deadline is None else max(0.1, self.deadline - time.perf_counter())
-            status, steps, stats = lacam.joint_plan(one, time_limit=left, max_nodes=5 * LACAM_NODES, pinned=pinned)
+            status, steps, stats = lacam.joint_plan(one, time_limit=left, max_nodes=15 * LACAM_NODES, pinned=pinned)
             self.stats["expanded"] += stats["nodes"]
             if steps is not None or status == "timeout":
                 break

@@ -122,13 +122,14 @@ class Loop(Allocation, LoadTransfer, Manipulation, Motion):
         # default step bound: ten times the carries plus a crossing of the grid per job
         self.max_steps = max(200, 10 * (carries + len(self.jobs) * (w + h))) if max_steps is None else max_steps
         self.max_shifts = 4 * m * m + 4 * len(self.jobs) if max_shifts is None else max_shifts
+        self.max_drops = len(self.jobs)  # temporary placements (LaCAM* motion) per run
         self.goal_cells = instance.goal_cells
         self.steps: list[tuple[int, ...]] = []
         self.stats: dict = {"motion": motion, "load_transfer": load_transfer, "d_tr": d_tr, "horizon": horizon,
                             "epsilon": epsilon, "jobs": len(self.jobs), "steps": 0, "relays": 0, "swaps": 0,
                             "pairs_considered": 0, "deferred_manipulations": 0, "priority_shifts": 0,
                             "circle_shifts": 0, "cautious_steps": 0, "replans": 0, "expanded": 0, "backtracks": 0,
-                            "goals_dropped": 0,
+                            "goals_dropped": 0, "drops": 0,
                             "plan_ms_mean": 0.0, "plan_ms_max": 0.0}
         self._lists: dict = {}
         self._ready_key, self._ready = None, set()
@@ -207,6 +208,14 @@ class Loop(Allocation, LoadTransfer, Manipulation, Motion):
                 self._joint = None  # a joint plan, when needed again, starts from here
             elif self.motion in JOINT:
                 joint = self._joint_step(fixed, goals, self.motion)
+                if joint is None and self.motion == "lacam" and self.stats.get("joint_status") != "timeout":
+                    dropped = self.drop()  # no plan gets a carrying robot on: it puts its tile down
+                    if dropped:
+                        fixed = dropped
+                        joint = [self.world.graphs[i].wait for i in range(len(self.legs))]
+                        for i, a in dropped.items():
+                            joint[i] = a
+                        self._joint = None
                 if joint is None:
                     why = self.stats.get("joint_status")
                     return stop(f"{JOINT[self.motion]} found no joint plan ({why})",

@@ -166,7 +166,7 @@ class LoadTransfer:
     def _snapshot(self) -> tuple:
         """The loop's state before a step's transfers (the states seen are added if any are made)."""
         return (self.state, [list(legs) for legs in self.legs], self.next_job, len(self.steps), list(self.Q),
-                {k: self.stats[k] for k in ("circle_shifts", "relays", "swaps")})
+                {k: self.stats[k] for k in ("circle_shifts", "relays", "swaps")}, self.jobs)
 
     def _backtrack(self) -> set:
         """Undo the latest step that made load transfers, and never make those transfers again.
@@ -176,9 +176,9 @@ class LoadTransfer:
         (the cost comparison of equation 2 knows distances, not congestion).
         """
         snap, seen, chosen = self._checkpoints.pop()
-        state, legs, next_job, n_steps, Q, counts = snap
+        state, legs, next_job, n_steps, Q, counts, jobs = snap
         self.tabu |= chosen
-        self.state, self.legs, self.next_job, self.Q = state, legs, next_job, Q
+        self.state, self.legs, self.next_job, self.Q, self.jobs = state, legs, next_job, Q, jobs
         del self.steps[n_steps:]
         self.stats.update(counts)
         self.stats["backtracks"] += 1
