@@ -135,7 +135,8 @@ class Motion:
         """A LaCAM* plan that brings every robot to its goal at once; when none is found within
         :data:`LACAM_NODES` configurations (the goals may not all be held at once: one robot's
         goal pose stands where another must end), a plan for one robot alone while the others
-        only make way, the robots taken in turn from ``Q`` (one further at every replan)."""
+        only make way (within 15 times as many), the robots taken in turn from ``Q`` (one further
+        at every replan). ``stats["goals_dropped"]`` counts the goals set aside for such plans."""
         pinned = {i: self.walk(i).cells(problem.start[i], a) for i, a in fixed.items()}
         dists = [None if c < 0 else d for c, d in zip(problem.goals, problem.dists)]
         status, steps, stats = lacam.joint_plan(problem, time_limit=left, max_nodes=LACAM_NODES, pinned=pinned)
