@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 from bille.instances import Instance, OptionError
 
 from .joint import NO_WALK, JointProblem, to_result
-from .pibt import Bille, Classic
+from .pibt import Bille, Classic, next_priorities
 
 OBJECTIVES = ("makespan", "sum-of-loss")
 RESTART = 0.001  # chance per iteration, while improving, to go back to the start configuration
@@ -127,7 +127,7 @@ class _LaCAM:
             priority = [d[p] / 10_000 for d, p in zip(dist, config)]
         else:
             at = self.problem.at_goal
-            priority = [v - int(v) if at(i, p) else v + 1 for i, (v, p) in enumerate(zip(parent.priority, config))]
+            priority = next_priorities(parent.priority, (at(i, p) for i, p in enumerate(config)))
         order = sorted(range(self.m), key=lambda i: -priority[i])
         node = _Node(config, parent, actions, g, self.h(config), priority, order)
         node.tree.append(())

@@ -139,12 +139,15 @@ class Manipulation:
                 action = walk.manipulation(pose, c, Kind.PLACE) if c >= 0 else None
                 if action is None or tiles[c] or c in pending or not walk.cells(pose, action).isdisjoint(busy):
                     continue
-                before = (self.jobs, self.legs[i])
-                self.jobs = self.jobs[:k] + [Job(c, legs[0].cell)] + self.jobs[k:]
-                self.legs[i] = [Leg(Kind.PLACE, c, legs[0].job)]
-                if self._allowed(tiles, self.legs[i][0], [op for op in self._pending_ops() if op[3] != (i, self.legs[i][0])]) is not None:
+                # the rest of the job runs next: after the jobs handed out, before those waiting
+                ops = [op for op in self._pending_ops() if op[3] != (i, legs[0])]
+                ops = sorted(ops + [((k - 0.5, 0), Kind.PICK, c, None), ((k - 0.5, 1), Kind.PLACE, legs[0].cell, None)],
+                             key=lambda op: op[0])
+                drop = Leg(Kind.PLACE, c, legs[0].job)
+                if self._allowed(tiles, drop, ops) is not None:
+                    self.jobs = self.jobs[:k] + [Job(c, legs[0].cell)] + self.jobs[k:]
+                    self.legs[i] = [drop]
                     self.stats["drops"] += 1
                     self._ready_key = None
                     return {i: action}
-                self.jobs, self.legs[i] = before
         return {}

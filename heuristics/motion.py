@@ -122,7 +122,7 @@ class Motion:
                 size = walks[i].succ.shape[0]
                 dist = self._zeros.setdefault(size, [0] * size)
             lists.append(dist)
-        self._priority = [v + 1 if d[p] > 0 else v - int(v) for v, d, p in zip(self._priority, lists, poses)]
+        self._priority = pibt.next_priorities(self._priority, (d[p] == 0 for d, p in zip(lists, poses)))
         order = sorted(range(len(poses)), key=lambda i: -self._priority[i])
         pinned = {i: walks[i].cells(poses[i], a) for i, a in fixed.items()}
         joint, _ = pibt.next_configuration(walks, lists, poses, order, pinned, self._rng, intents)

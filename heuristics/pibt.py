@@ -36,6 +36,12 @@ def next_configuration(walks: list, dist_lists: list[list[int]], config: Poses, 
     return got
 
 
+def next_priorities(priority: list[float], resting) -> list[float]:
+    """LaCAM's priority rule for the next step: a robot away from its goal gains one, a robot
+    resting at its goal (``resting[i]``) keeps only the fraction (so no robot is starved)."""
+    return [v - int(v) if rest else v + 1 for v, rest in zip(priority, resting)]
+
+
 @dataclass
 class _Step:
     """The part of a :class:`JointProblem` the generator reads, built from ready lists."""
@@ -47,11 +53,13 @@ class _Step:
         return self.walks[i].moves(pose)
 
 
-class Bille:
-    """PIBT for rule 3 (module docstring): the pushed robots move now, the pusher next step."""
-
+class _Generator:
     def __init__(self, problem, rng: random.Random) -> None:
         self.problem, self.rng = problem, rng  # a JointProblem, or anything with moves, walks, dist_lists
+
+
+class Bille(_Generator):
+    """PIBT for rule 3 (module docstring): the pushed robots move now, the pusher next step."""
 
     def generate(self, config: Poses, order: list[int], forced: tuple, pinned: dict[int, frozenset],
                  wants: dict[int, frozenset] | None = None) -> tuple[tuple[int, ...], Poses] | None:
@@ -127,11 +135,8 @@ class Bille:
         self._claim(i, 0)  # waiting is always free: nobody claims cells another robot stands on
 
 
-class Classic:
+class Classic(_Generator):
     """PIBT with classic collisions (point robots): vertex and swap conflicts only."""
-
-    def __init__(self, problem, rng: random.Random) -> None:
-        self.problem, self.rng = problem, rng  # a JointProblem, or anything with moves, walks, dist_lists
 
     def generate(self, config: Poses, order: list[int], forced: tuple,
                  pinned: dict[int, frozenset]) -> tuple[tuple[int, ...], Poses] | None:
@@ -143,9 +148,7 @@ class Classic:
         self.choice: list[int | None] = [None] * m
         for i, k in forced:
             q = self.moves[i][k][1]
-            j = self.here.get(q)
-            if q in self.next_at or (j is not None and j != i and self.choice[j] is not None
-                                     and self.moves[j][self.choice[j]][1] == config[i]):
+            if q in self.next_at or self._swaps(i, q):
                 return None
             self._claim(i, k)
         for i in order:
@@ -161,6 +164,13 @@ class Classic:
         self.choice[i] = k
         self.next_at[self.moves[i][k][1]] = i
 
+    def _swaps(self, i: int, q: int) -> bool:
+        """Whether robot ``i`` moving to ``q`` swaps with a decided robot standing on ``q``."""
+        j = self.here.get(q)
+        if j is None or j == i or self.choice[j] is None:
+            return False
+        return self.moves[j][self.choice[j]][1] == self.config[i]
+
     def _decide(self, i: int, pusher: int | None) -> bool:
         dist = self.problem.dist_lists[i]
         here = self.here
@@ -172,9 +182,9 @@ class Classic:
                 continue
             if pusher is not None and q == self.config[pusher]:
                 continue  # no swap with the robot that pushes
+            if self._swaps(i, q):
+                continue  # the robot at q already moves into i's cell
             j = self.here.get(q)
-            if j is not None and j != i and self.choice[j] is not None and self.moves[j][self.choice[j]][1] == self.config[i]:
-                continue  # j already moves into i's cell: a swap
             self._claim(i, k)
             if j is not None and j != i and self.choice[j] is None:
                 if not self._decide(j, i):  # j stays where i wanted to go

@@ -44,12 +44,7 @@ def optimal_soc(instance, max_states: int = 200_000) -> tuple[int, int] | None:
             return cost, t
         if len(best) > max_states:
             raise RuntimeError("brute force: too many states")
-        options = []
-        for i in range(m):
-            kinds = world.graphs[i].kind
-            acts = [a for a in candidate_actions(instance, state, i) if kinds[a] in (Kind.WAIT, Kind.MOTION)]
-            options.append(acts)
-        for joint in itertools.product(*options):
+        for joint in itertools.product(*walking_options(instance, state)):
             nxt = apply(world, state, joint)
             if not isinstance(nxt, State):
                 continue
@@ -80,9 +75,7 @@ def walking_makespan(instance, max_states: int = 200_000) -> int | None:
             return depth
         nxt_layer = []
         for state in layer:
-            options = [[a for a in candidate_actions(instance, state, i)
-                        if world.graphs[i].kind[a] in (Kind.WAIT, Kind.MOTION)] for i in range(instance.num_robots)]
-            for joint in itertools.product(*options):
+            for joint in itertools.product(*walking_options(instance, state)):
                 nxt = apply(world, state, joint)
                 if isinstance(nxt, State) and nxt.poses not in seen:
                     seen.add(nxt.poses)
@@ -91,3 +84,10 @@ def walking_makespan(instance, max_states: int = 200_000) -> int | None:
             raise RuntimeError("brute force: too many states")
         layer, depth = nxt_layer, depth + 1
     return None
+
+
+def walking_options(instance, state) -> list[list[int]]:
+    """Per robot, its walking actions (wait and motions) that pass its own rules on ``state``."""
+    graphs = instance.world.graphs
+    return [[a for a in candidate_actions(instance, state, i) if graphs[i].kind[a] in (Kind.WAIT, Kind.MOTION)]
+            for i in range(instance.num_robots)]

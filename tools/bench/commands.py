@@ -38,12 +38,7 @@ def bench_execute(sizes: str, steps: int, broker: str | None) -> int:
     from .execute import report
     from ..execute.broker import parse_url
 
-    try:
-        counts = sorted({int(s) for s in sizes.split(",") if s.strip()})
-    except ValueError:
-        raise click.BadParameter(f"{sizes!r}: expected numbers like 10,50", param_hint="--robots") from None
-    if not counts or counts[0] < 1:
-        raise click.BadParameter(f"{sizes!r}: fleet sizes must be at least 1", param_hint="--robots")
+    counts = sorted(set(_counts(sizes, "--robots", "fleet sizes")))
     if broker:
         parse_url(broker)
     for line in report(counts, steps, broker):
@@ -63,10 +58,10 @@ def bench_planners(time_limit: float, jobs: int | None, maps: str, movesets: str
     """The paper's planner comparison: A*, M*, Temporal A* (and LaCAM*) on the comparison maps."""
     from .planners import default_jobs, plot, run_grid, tables, write_csv
 
-    names = [m.strip() for m in maps.split(",") if m.strip()]
+    names = _names(maps)
     for name in names:
         bundled_path(name)  # unknown names fail here, before any work
-    sets = [m.strip() for m in movesets.split(",") if m.strip()]
+    sets = _names(movesets)
     for ms in sets:
         if ms not in ("S5", "S7", "point"):
             raise click.BadParameter(f"unknown moveset {ms!r}", param_hint="--movesets")
@@ -138,7 +133,7 @@ def bench_load_transfer(maps: str, horizon: int, d_tr: int, time_limit: float, r
     epsilon 1), the percentage decrease in time steps and tiles traveled, and a bar plot."""
     from .transfer import plot, random_report, run_maps, table, write_csv
 
-    names = [m.strip() for m in maps.split(",") if m.strip()]
+    names = _names(maps)
     instances = [instance_arg(name) for name in names]  # unknown names fail here, before any work
     folder = output_folder(out)
     rows = run_maps(instances, horizon, d_tr, time_limit)
@@ -181,9 +176,9 @@ def bench_mapf(folder: str, maps: str, agents: str, time_limit: float, improve: 
 
     from .mapf import mapf_rows, mapf_table
 
-    counts = _counts(agents, "--agents")
+    counts = _counts(agents, "--agents", "agent counts")
     rows = []
-    for row in mapf_rows(Path(folder), [m.strip() for m in maps.split(",") if m.strip()], counts, time_limit, improve):
+    for row in mapf_rows(Path(folder), _names(maps), counts, time_limit, improve):
         rows.append(row)
         click.echo(f"{row['map']} {row['agents']} agents: {row['status']} {row.get('reason', '')}".rstrip(), err=True)
     for line in mapf_table(rows):
@@ -201,18 +196,24 @@ def bench_lacam(size: int, robots: str, seed: int) -> int:
 
     click.echo(f"LaCAM* on a fully tiled {size}x{size} square, S7 robots, random goal cells (seed {seed}); "
                "target: first schedule within 10 s for 200 robots")
-    for r in scale_rows(size, _counts(robots, "--robots"), seed):
+    for r in scale_rows(size, _counts(robots, "--robots", "robot counts"), seed):
         first = "-" if r["first_s"] is None else f"{r['first_s']:.2f} s"
         click.echo(f"  {r['robots']:>4} robots: {r['status']}, first schedule after {first}, makespan "
                    f"{r['makespan']}, {r['nodes']} configurations, total {r['time_s']:.2f} s")
     return EXIT_OK
 
 
-def _counts(text: str, option: str) -> list[int]:
+def _names(text: str) -> list[str]:
+    """The non-empty entries of a comma-separated option."""
+    return [part.strip() for part in text.split(",") if part.strip()]
+
+
+def _counts(text: str, option: str, what: str) -> list[int]:
+    """The whole numbers (each at least 1) of a comma-separated option; ``what`` names them."""
     try:
-        counts = [int(v) for v in text.split(",") if v.strip()]
+        counts = [int(v) for v in _names(text)]
     except ValueError:
-        raise click.BadParameter(f"expected comma-separated whole numbers, got {text!r}", param_hint=option) from None
+        raise click.BadParameter(f"{text!r}: expected numbers like 10,50", param_hint=option) from None
     if not counts or min(counts) < 1:
-        raise click.BadParameter(f"expected positive counts, got {text!r}", param_hint=option)
+        raise click.BadParameter(f"{text!r}: {what} must be at least 1", param_hint=option)
     return counts

@@ -34,6 +34,19 @@ def holey_square(size: int, rnd: random.Random) -> np.ndarray:
     return tiles
 
 
+def north_facing(tiles: np.ndarray, size: int, robots: int, rnd: random.Random) -> list[Robot]:
+    """``robots`` biped starts heading north at random spots of a ``size`` square's tiles, feet
+    apart (the caller makes sure they fit)."""
+    placed, used = [], set()
+    while len(placed) < robots:
+        x, y = rnd.randrange(size), rnd.randrange(size - 1)
+        f, b = (x, y), (x, y + 1)
+        if tiles[y * size + x] and tiles[(y + 1) * size + x] and not {f, b} & used:
+            placed.append(Robot(f, b))
+            used |= {f, b}
+    return placed
+
+
 def random_instance(size: int, robots: int, seed: int) -> Instance:
     """An all-tile square with ~8% holes (kept connected) and robots on random free spots."""
     rnd = random.Random(seed)

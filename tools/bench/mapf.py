@@ -16,13 +16,14 @@ from pathlib import Path
 
 import numpy as np
 
-from bille.instances import Grid, Instance, InstanceError, Robot, check_instance, load_moveset
+from bille.instances import Grid, Instance, InstanceError, check_instance, load_moveset
 from bille.instances.generators.movingai import from_movingai
 from bille.instances.schedule import bind
 from bille.instances.walking import walk_for
 from bille.solvers import solve
 
 from ..tables import text_table
+from .core import north_facing
 
 MAPS = ("random-32-32-10", "room-32-32-4", "warehouse-10-20-10-2-1")
 AGENTS = (50, 100, 200, 300, 400)
@@ -94,14 +95,9 @@ def full_square(size: int, robots: int, seed: int = 0) -> Instance:
     n = size * size
     tiles = np.ones(n, dtype=bool)
     grid = Grid.from_masks(size, size, np.zeros(n, dtype=bool), tiles)
-    placed, used = [], set()
     if 2 * robots > n:
         raise InstanceError(f"{robots} robots do not fit on a {size}x{size} square")
-    while len(placed) < robots:
-        x, y = rnd.randrange(size), rnd.randrange(size - 1)
-        if not {(x, y), (x, y + 1)} & used:
-            placed.append(Robot((x, y), (x, y + 1)))
-            used |= {(x, y), (x, y + 1)}
+    placed = north_facing(tiles, size, robots, rnd)
     goals = tuple(grid.xy(c) for c in rnd.sample(range(n), robots))
     return check_instance(Instance(f"square-{size}-{robots}", load_moveset("S7"), grid, tuple(placed),
                                    robot_goals=goals))

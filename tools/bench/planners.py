@@ -180,22 +180,16 @@ def plot(rows: list[dict], time_limit: float, path: Path) -> None:
 def crowd_instance(size: int, robots: int, seed: int):
     """A ``size`` square of tiles with ~8% holes, ``robots`` S7 robots and random goal cells."""
     from bille.instances.walking import UNREACHABLE, walk_for
-    from bille.instances import Grid, Instance, Robot, check_instance, load_moveset
+    from bille.instances import Grid, Instance, check_instance, load_moveset
 
-    from .core import holey_square
+    from .core import holey_square, north_facing
 
     rnd = random.Random(seed)
     n = size * size
     tiles = holey_square(size, rnd)
     grid = Grid.from_masks(size, size, np.zeros(n, bool), tiles)
     ms = load_moveset("S7")
-    placed, used = [], set()
-    while len(placed) < robots:
-        x, y = rnd.randrange(size), rnd.randrange(size - 1)
-        f, b = (x, y), (x, y + 1)
-        if tiles[grid.cell(*f)] and tiles[grid.cell(*b)] and not {f, b} & used:
-            placed.append(Robot(f, b))
-            used |= {f, b}
+    placed = north_facing(tiles, size, robots, rnd)
     probe = Instance("crowd", ms, grid, tuple(placed))
     walk = walk_for(probe.world.graphs[0], tiles)
     goals, taken = [], set()
