@@ -64,18 +64,15 @@ def connectivity_cuts(model, instance: Instance, masks: list[np.ndarray]) -> lis
     """
     W, H = instance.width, instance.height
     cuts, seen = [], set()
-    for mask in masks:
-        labels, count = components(mask, W, H)
-        if count <= 1:
-            continue
-        comps = [np.flatnonzero(labels == k + 1).tolist() for k in range(count)]
+    for comps in _split(masks, W, H):
+        count = len(comps)
         for k, S in enumerate(comps):
             other = comps[(k + 1) % count][0]
-            border = set()
+            border, in_s = set(), set(S)  # the neighbours of a component are empty cells
             for c in S:
                 for dx, dy in HEADING_VECTORS:
                     x, y = c % W + dx, c // W + dy
-                    if 0 <= x < W and 0 <= y < H and not mask[y * W + x]:
+                    if 0 <= x < W and 0 <= y < H and y * W + x not in in_s:
                         border.add(y * W + x)
             key = (tuple(S), tuple(sorted(border)), other)
             if key in seen:
@@ -88,3 +85,65 @@ def connectivity_cuts(model, instance: Instance, masks: list[np.ndarray]) -> lis
                     lits.append(-model.tile[(t, other)])
                 cuts.append(lits)
     return cuts
+
+
+def separator_cuts(model, instance: Instance, masks: list[np.ndarray], candidates: np.ndarray) -> list[list[int]]:
+    """Minimal vertex-separator cuts excluding the disconnected tile sets of a solution.
+
+    For two components ``A`` and ``B`` of a disconnected step, with cells ``a`` in ``A`` and ``b``
+    in ``B``: let ``N(A)`` be the candidate cells next to ``A`` (all empty in this solution),
+    ``Z`` the candidate cells reachable from ``b`` without entering ``A`` or ``N(A)``, and ``N``
+    the cells of ``N(A)`` next to ``Z`` (a minimal separator of ``a`` and ``b``). Cut: not ``a``,
+    or not ``b``, or some cell of ``N`` holds a tile.
+
+    Why it holds for every connected tile set: if ``a`` and ``b`` both hold tiles and the set is
+    connected, a path of tiles joins them through candidate cells (only candidate cells ever hold
+    tiles). Follow it backwards from ``b``: it starts in ``Z`` (``b`` is in ``Z``) and ends at
+    ``a``, outside ``Z``, so it leaves ``Z`` at some cell; a cell next to ``Z`` that is not in
+    ``Z`` is, by the definition of ``Z``, in ``N(A)``, hence in ``N``; so some cell of ``N`` holds
+    a tile. It excludes the solution: there ``a`` and ``b`` hold tiles and ``N`` (next to ``A``,
+    not in ``A``) is empty. Separators are short (one to a few cells on thin structures), so the
+    clauses propagate well; they are added at every inner time point (the argument holds at each).
+    """
+    W, H = instance.width, instance.height
+    cuts, seen = [], set()
+
+    def nbrs(c):
+        x, y = c % W, c // W
+        for dx, dy in HEADING_VECTORS:
+            if 0 <= x + dx < W and 0 <= y + dy < H and candidates[c + dy * W + dx]:
+                yield c + dy * W + dx
+
+    for comps in _split(masks, W, H):
+        for k, A in enumerate(comps):
+            for B in (comps[:k] + comps[k + 1:])[:2]:
+                a, b = A[0], B[0]
+                in_a = set(A)
+                around = {n for c in A for n in nbrs(c) if n not in in_a}
+                zone, stack = {b}, [b]
+                while stack:
+                    c = stack.pop()
+                    for n in nbrs(c):
+                        if n not in zone and n not in around and n not in in_a:
+                            zone.add(n)
+                            stack.append(n)
+                sep = sorted(n for n in around if any(z in zone for z in nbrs(n)))
+                key = (a, b, tuple(sep))
+                if key in seen:
+                    continue
+                seen.add(key)
+                for t in range(1, model.T):
+                    lits = [model.tile[(t, c)] for c in sep if (t, c) in model.tile]
+                    for c in (a, b):
+                        if (t, c) in model.tile:
+                            lits.append(-model.tile[(t, c)])
+                    cuts.append(lits)
+    return cuts
+
+
+def _split(masks: list[np.ndarray], W: int, H: int):
+    """The cells of each component, for every mask of more than one component."""
+    for mask in masks:
+        labels, count = components(mask, W, H)
+        if count > 1:
+            yield [np.flatnonzero(labels == k + 1).tolist() for k in range(count)]

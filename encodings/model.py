@@ -50,8 +50,9 @@ from bille.instances.moveset import Kind
 from bille.instances.distances import INF, relaxed_for
 
 from .connectivity import eager_connectivity
+from .reach import reach_in_time
 
-CONNECTIVITY = ("eager", "lazy")
+CONNECTIVITY = ("eager", "lazy", "cuts")
 
 
 class OutOfTime(Exception):
@@ -72,6 +73,7 @@ class Options:
 
     prune_reach: bool = True
     prune_cells: bool = True
+    prune_tiles: bool = True  # reachability in time with the tiles (:mod:`.reach`)
     connectivity: str = "eager"
     single_carry: bool = False
 
@@ -90,6 +92,7 @@ class Model:
     done: dict = field(default_factory=dict)  # k -> var
     motion: list[int] = field(default_factory=list)  # y variables of motion actions
     true: int = 0
+    candidates: np.ndarray | None = None  # cells that may ever hold a tile
 
     @property
     def num_vars(self) -> int:
@@ -122,16 +125,21 @@ class Model:
 
 
 def build(instance: Instance, T: int, options: Options = Options(), min_done: int | None = None,
-          deadline: float | None = None) -> Model:
+          deadline: float | None = None, end=None) -> Model:
     """The model of ``instance`` with horizon ``T``. With ``min_done``, ``done[k]`` literals for
     ``k = min_done .. T`` are added for an incremental makespan search by assumptions. Raises
-    :class:`OutOfTime` if building passes ``deadline`` (a ``time.perf_counter()`` value)."""
-    return _Builder(instance, T, options, deadline).build(min_done)
+    :class:`OutOfTime` if building passes ``deadline`` (a ``time.perf_counter()`` value).
+
+    With ``end`` (a :class:`~bille.instances.State`), every robot ends at ``T`` in exactly its pose
+    and load in ``end`` (robot goal cells are then ignored); the tiles at ``T`` are the goal
+    tiles as always. A window of a schedule re-solved this way fits back in its place."""
+    return _Builder(instance, T, options, deadline, end).build(min_done)
 
 
 class _Builder:
-    def __init__(self, instance: Instance, T: int, options: Options, deadline: float | None = None) -> None:
-        self.deadline = deadline
+    def __init__(self, instance: Instance, T: int, options: Options, deadline: float | None = None,
+                 end=None) -> None:
+        self.deadline, self.end = deadline, end
         if options.connectivity not in CONNECTIVITY:
             raise ValueError(f"connectivity must be one of {CONNECTIVITY}")
         self.inst, self.T, self.opt = instance, T, options
@@ -168,6 +176,9 @@ class _Builder:
     def _reachable_poses(self) -> None:
         """R[i][t]: bool mask of the poses robot i may have at time t."""
         T, goals = self.T, self.inst.goal_cells
+        self.timed = reach_in_time(self.inst, T, self.end) if self.opt.prune_tiles else None
+        if self.end is not None:
+            goals = [-1] * len(goals)
         self.R = []
         for i, g in enumerate(self.world.graphs):
             start = self.state.poses[i]
@@ -186,6 +197,10 @@ class _Builder:
                     mask[start] = True
                 if t == T and goals[i] >= 0:
                     mask &= g.feet[:, 0] == goals[i]
+                if t == T and self.end is not None:
+                    mask &= np.arange(g.num_poses) == self.end.poses[i]
+                if self.timed is not None:
+                    mask &= self.timed.poses[i][t]
                 masks.append(mask)
             self.R.append(masks)
 
@@ -206,6 +221,7 @@ class _Builder:
             cand = ~self.world.obstacles.copy()
         cand &= ~self.world.obstacles
         self.cand = cand
+        self.m.candidates = cand
         self.cells = np.flatnonzero(cand).tolist()
         # a pose whose feet can never stand on tiles is never used
         for i, g in enumerate(self.world.graphs):
@@ -246,6 +262,8 @@ class _Builder:
                     m.tile[(t, c)] = self.const(bool(start[c]))
                 elif t >= hi:
                     m.tile[(t, c)] = self.const(bool(goal[c]))
+                elif self.timed is not None and not self.timed.tiles[t, c]:
+                    m.tile[(t, c)] = self.const(False)
                 elif self.opt.single_carry and start[c] == goal[c]:
                     m.tile[(t, c)] = self.const(bool(goal[c]))
                 else:
@@ -261,6 +279,8 @@ class _Builder:
                 if t == 0:
                     self.carry[(i, t)] = self.const(self.state.carrying[i])
                 elif t == T:
+                    self.carry[(i, t)] = self.const(self.end is not None and bool(self.end.carrying[i]))
+                elif self.timed is not None and not self.timed.carry[i, t]:
                     self.carry[(i, t)] = self.const(False)
                 else:
                     self.carry[(i, t)] = m.var(("carry", i, t))

@@ -9,9 +9,9 @@ step ``k``), incrementally, rebuilding only when the range is exhausted. With la
 each solution is checked step by step and a disconnected one adds cuts for every step before the
 solver goes on. Then, at the optimal makespan, tiles traveled are minimized (``minimize_travel``).
 
-Incumbent: on a path-planning instance Temporal A* runs first (a few milliseconds, at most a tenth
-of the time limit); its makespan caps the horizons, and it is the schedule returned when time runs
-out.
+Incumbent: a schedule given with ``incumbent``, or else the best the heuristics find in a tenth of
+the time limit (at most 10 s; :func:`.incumbent.first_schedule`), validated; its makespan caps
+the horizons, and it is the schedule returned (``feasible``) when time runs out.
 
 Statuses: ``optimal`` (makespan proved optimal; ``stats.tiles_traveled_optimal`` says whether
 the second objective was proved too), ``feasible`` (time ran out; the incumbent, with the lower
@@ -26,18 +26,17 @@ import time
 import numpy as np
 
 from bille.encodings.cnf import SOLVERS, SatBackend
-from bille.encodings.connectivity import connectivity_cuts
+from bille.encodings.connectivity import connectivity_cuts, separator_cuts
 from bille.encodings.cpsat import CpSatBackend
 from bille.encodings.model import CONNECTIVITY, Options, OutOfTime, build
 from bille.encodings.solution import decode, tiles_at
-from bille.heuristics import temporal_astar
 from bille.instances import Instance, OptionError
-from bille.instances.metrics import metrics
 from bille.instances.result import Result
 from bille.instances.rules import goal_violation
-from bille.instances.schedule import Schedule, bind
+from bille.instances.schedule import Schedule
 
 from .bounds import Bounds, lower_bound
+from .incumbent import first_schedule, from_schedule
 
 SAT, UNSAT, UNKNOWN = "sat", "unsat", "unknown"
 
@@ -51,7 +50,7 @@ def plan_cpsat(instance: Instance, *, time_limit: float | None = None, threads: 
                presolve: bool = False,
                max_makespan: int | None = None, connectivity: str = "eager", minimize_travel: bool = True,
                prune: bool = True, single_carry: bool = False, first_horizon: int | None = None,
-               bounds: Bounds | None = None) -> Result:
+               incumbent: Schedule | None = None, bounds: Bounds | None = None) -> Result:
     """Optimal makespan with OR-Tools CP-SAT.
 
     Parameters
@@ -72,19 +71,20 @@ def plan_cpsat(instance: Instance, *, time_limit: float | None = None, threads: 
     first_horizon : a guess of the optimal makespan: the search starts there, going down while
         schedules are found and up while none is, instead of up from the lower bound (each
         horizon below the optimum costs a proof of infeasibility; one at ``T - 1`` is enough).
+    incumbent : a schedule to start from (``bille solve --incumbent FILE``); must be valid.
     bounds : the static lower bound, if already computed (``solve()`` passes it).
     """
     if first_horizon is not None and first_horizon < 1:
         raise OptionError(f"cpsat: first_horizon must be at least 1, got {first_horizon}")
     return _Search("cpsat", instance, time_limit, max_makespan, connectivity, minimize_travel, prune,
                    single_carry, threads=threads, seed=seed, presolve=presolve,
-                   first_horizon=first_horizon, bounds=bounds).run()
+                   first_horizon=first_horizon, incumbent=incumbent, bounds=bounds).run()
 
 
 def plan_sat(instance: Instance, *, time_limit: float | None = None, max_makespan: int | None = None,
              connectivity: str = "eager", minimize_travel: bool = True, prune: bool = True,
              single_carry: bool = False, solver: str = "cadical195", chunk: int = 8,
-             bounds: Bounds | None = None) -> Result:
+             incumbent: Schedule | None = None, bounds: Bounds | None = None) -> Result:
     """Optimal makespan with a SAT solver of python-sat, incremental with assumptions.
 
     Parameters are those of :func:`plan_cpsat`, and: ``solver`` (a python-sat solver name),
@@ -93,7 +93,7 @@ def plan_sat(instance: Instance, *, time_limit: float | None = None, max_makespa
     if solver not in SOLVERS:
         raise OptionError(f"sat: unknown solver {solver!r} (expected one of: {', '.join(SOLVERS)})")
     return _Search("sat", instance, time_limit, max_makespan, connectivity, minimize_travel, prune,
-                   single_carry, solver=solver, chunk=chunk, bounds=bounds).run()
+                   single_carry, solver=solver, chunk=chunk, incumbent=incumbent, bounds=bounds).run()
 
 
 class _Search:
@@ -108,7 +108,7 @@ class _Search:
         self.method, self.instance, self.kw = method, instance, kw
         self.start = time.perf_counter()
         self.deadline = None if time_limit is None else self.start + time_limit
-        self.options = Options(prune_reach=prune, prune_cells=prune, connectivity=connectivity,
+        self.options = Options(prune_reach=prune, prune_cells=prune, prune_tiles=prune, connectivity=connectivity,
                                single_carry=single_carry)
         self.minimize_travel = minimize_travel
         self.incumbent: np.ndarray | None = None
@@ -132,19 +132,22 @@ class _Search:
         return self.result("timeout", lower=lower)
 
     def _find_incumbent(self) -> None:
-        """A first schedule from Temporal A* (path planning only); its makespan caps the search."""
-        if self.instance.is_reconfiguration:
+        """A first schedule (the one given, else from the heuristics); its makespan caps the search."""
+        given = self.kw.pop("incumbent", None)
+        if given is not None:
+            found = from_schedule(self.instance, given, "given")
+            if found is None:
+                raise OptionError(f"{self.method}: the incumbent schedule is not valid for instance "
+                                  f"'{self.instance.name}' (bille check says why)")
+        else:
+            budget = 5.0 if self.deadline is None else min(10.0, 0.1 * (self.deadline - time.perf_counter()))
+            found = first_schedule(self.instance, max(budget, 0.01))
+        if found is None:
             return
-        budget = 5.0 if self.deadline is None else min(5.0, 0.1 * (self.deadline - time.perf_counter()))
-        found = temporal_astar.plan(self.instance, time_limit=max(budget, 0.01))
-        if found.schedule is None:
-            return
-        ids = bind(self.instance, found.schedule)
-        makespan = metrics(self.instance, ids).makespan
-        if makespan <= self.cap:
-            self.incumbent, self.cap = ids[:, :makespan], makespan
-            self.stats["incumbent"] = {"method": "temporal-astar", "makespan": makespan}
-            self.stats["horizon_cap"] = makespan
+        self.stats["incumbent"] = {"method": found.method, "makespan": found.makespan}
+        if found.makespan <= self.cap:
+            self.incumbent, self.cap = found.ids, found.makespan
+            self.stats["horizon_cap"] = found.makespan
 
     def result(self, status, ids=None, lower=None) -> Result:
         schedule = None if ids is None else Schedule.from_ids(self.instance, ids, meta={"method": self.method})
@@ -166,7 +169,11 @@ class _Search:
 
     def _check(self, backend, model) -> bool:
         """Whether the backend's solution keeps the tiles connected; if not, add cuts."""
-        cuts = connectivity_cuts(model, self.instance, tiles_at(model, self.instance, backend.value))
+        masks = tiles_at(model, self.instance, backend.value)
+        if self.options.connectivity == "cuts":
+            cuts = separator_cuts(model, self.instance, masks, model.candidates)
+        else:
+            cuts = connectivity_cuts(model, self.instance, masks)
         if cuts:
             backend.add_clauses(cuts)
             self.stats["cuts"] += len(cuts)
@@ -183,6 +190,8 @@ class _Search:
         T = lower if first is None else min(max(lower, first), self.cap)
         found, proved_below = None, lower  # the smallest satisfiable horizon; no schedule below this
         while T <= self.cap:
+            if found is None and self.incumbent is not None and proved_below >= self.incumbent.shape[1]:
+                return self._proved_incumbent(proved_below)
             try:
                 model = build(self.instance, T, self.options, deadline=self.deadline)
                 backend = CpSatBackend(model, self.kw["threads"], self.kw["seed"], deadline=self.deadline,
@@ -216,11 +225,35 @@ class _Search:
         self.stats["solver"] = backend.stats
         return self.result("optimal", ids, lower=model.T)
 
+    def _proved_incumbent(self, k: int) -> Result:
+        """Every horizon below ``k``, the incumbent's makespan, is infeasible: the incumbent is
+        optimal. Tiles traveled are then minimized at ``k`` as after any other proof."""
+        ids = self.incumbent
+        self.stats["tiles_traveled_optimal"] = False
+        if self.minimize_travel:
+            try:
+                model = build(self.instance, k, self.options, min_done=None if self.method == "cpsat" else k,
+                              deadline=self.deadline)
+                if self.method == "cpsat":
+                    backend = CpSatBackend(model, self.kw["threads"], self.kw["seed"], deadline=self.deadline,
+                                           presolve=self.kw["presolve"])
+                    ids = self._cpsat_travel(backend, model, ids)
+                else:
+                    backend = SatBackend(model, self.kw["solver"])
+                    try:
+                        if self._sat_solve(backend, model, [model.done[k]]) == SAT:
+                            ids = self._sat_travel(backend, model, k, decode(model, self.instance, backend.value)[:, :k])
+                    finally:
+                        backend.delete()
+            except OutOfTime:
+                pass
+        return self.result("optimal", ids, lower=k)
+
     def _cpsat_travel(self, backend, model, ids):
         self.stats["tiles_traveled_optimal"] = False
         if not self.minimize_travel:
             return ids
-        hint = list(backend.values)  # the first solution, to start the minimization from
+        hint = None if backend.values is None else list(backend.values)  # a solution to start from
         while True:
             status = backend.solve(self.left(), minimize=model.motion, hint=hint, presolve=True)
             if backend.values is None:
@@ -244,6 +277,8 @@ class _Search:
             backend = SatBackend(model, self.kw["solver"])
             try:
                 while k <= T:
+                    if self.incumbent is not None and k >= self.incumbent.shape[1]:
+                        return self._proved_incumbent(k)
                     began = time.perf_counter()
                     status = self._sat_solve(backend, model, [model.done[k]])
                     self.stats["horizons"].append({"T": k, "model_horizon": T, "variables": backend.top,

@@ -3,6 +3,7 @@ import pytest
 
 from bille.instances import OptionError, load_instance
 from bille.instances.bundled import bundled_path
+from bille.instances.schedule import Schedule, bind
 from bille.solvers import solve, validate
 from bille.solvers.bounds import lower_bound
 from helpers import make
@@ -42,7 +43,7 @@ def optimum():
 @pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n in ("handover", "point-pass") else n
                                   for n in TINY])
 @pytest.mark.parametrize("method", ["cpsat", "sat"])
-@pytest.mark.parametrize("connectivity", ["lazy", "eager"])
+@pytest.mark.parametrize("connectivity", ["lazy", "eager", "cuts"])
 def test_exact_makespan_equals_breadth_first_search(name, method, connectivity, optimum):
     inst = TINY[name]()
     result = solve(inst, method, connectivity=connectivity, time_limit=120)
@@ -119,26 +120,43 @@ def test_no_schedule_within_the_horizon_cap_is_no_proof(method):
 def test_a_timeout_returns_the_bound_not_a_crash(method):
     inst = load_instance(bundled_path("bridge-2"))
     result = solve(inst, method, time_limit=1.0)
-    assert result.status in ("timeout", "optimal")
+    assert result.status in ("timeout", "feasible", "optimal")
+    assert result.lower_bound >= lower_bound(inst).lower
     if result.status == "timeout":
-        assert result.schedule is None and result.lower_bound >= lower_bound(inst).lower
+        assert result.schedule is None
+    else:
+        assert validate(inst, result.schedule).valid and result.lower_bound <= result.metrics.makespan
 
 
 @pytest.mark.parametrize("method", ["cpsat", "sat"])
-def test_a_timeout_on_path_planning_returns_the_incumbent(method, monkeypatch):
+@pytest.mark.parametrize("name", ["compare-5", "bridge-2"])
+def test_a_timeout_returns_the_incumbent(method, name, monkeypatch):
     from bille.encodings.cnf import SatBackend
     from bille.encodings.cpsat import CpSatBackend
 
     # the solver runs out of time at its first call, whatever the machine's speed
     monkeypatch.setattr(CpSatBackend, "solve", lambda self, *a, **k: "unknown")
     monkeypatch.setattr(SatBackend, "solve", lambda self, *a, **k: "unknown")
-    inst = load_instance(bundled_path("compare-5"))
+    inst = load_instance(bundled_path(name))
     result = solve(inst, method, time_limit=600)
     assert result.status == "feasible"
     assert validate(inst, result.schedule).valid
-    assert result.stats["incumbent"]["method"] == "temporal-astar"
+    assert result.stats["incumbent"]["method"] in ("lacam", "temporal-astar", "mstar")
     assert result.metrics.makespan == result.stats["incumbent"]["makespan"]
     assert lower_bound(inst).lower <= result.lower_bound <= result.metrics.makespan
+
+
+@pytest.mark.parametrize("method", ["cpsat", "sat"])
+def test_an_optimal_incumbent_is_proved_and_a_bad_one_refused(method, optimum):
+    inst = TINY["s7-two-robots"]()
+    best = solve(inst, "bfs", time_limit=300)
+    result = solve(inst, method, incumbent=best.schedule)
+    assert result.status == "optimal" and result.stats["incumbent"]["method"] == "given"
+    assert result.metrics.makespan == result.lower_bound == optimum("s7-two-robots")
+    assert validate(inst, result.schedule).valid
+    bad = Schedule.from_ids(inst, bind(inst, best.schedule)[:, :1])
+    with pytest.raises(OptionError, match="incumbent schedule is not valid"):
+        solve(inst, method, incumbent=bad)
 
 
 @pytest.mark.parametrize("method", ["cpsat", "sat"])
