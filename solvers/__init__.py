@@ -19,10 +19,11 @@ from .registry import CLASSIC, METHODS
 from .validate import Report, validate
 
 
-def solve(instance: Instance, method: str, **options) -> Result:
+def solve(instance: Instance, method: str, progress=None, **options) -> Result:
     """Solve ``instance`` with ``method`` (a key of :data:`METHODS`).
 
-    Options are checked by type and range first (:mod:`.options`). The static lower bound
+    Options are checked by type and range first (:mod:`.options`). ``progress``, a callable, is
+    handed to the methods that report progress (``anytime``; see its docstring). The static lower bound
     (:mod:`.bounds`) is computed once, here, and handed to the methods that search from it. The
     returned schedule is validated here: a schedule that breaks a rule turns the result into
     status ``error`` (with the violation in ``stats``) instead of reaching the user. So does a
@@ -40,11 +41,14 @@ def solve(instance: Instance, method: str, **options) -> Result:
     if instance.collisions == "classic" and method not in CLASSIC:
         raise OptionError(f"instance '{instance.name}' uses classic collisions; {method} plans under the Bill-E "
                           f"rule only (classic: {', '.join(CLASSIC)})")
-    options = check_options(method, plan, options, internal=("bounds",))
+    options = check_options(method, plan, options, internal=("bounds", "progress"))
     start = _time.perf_counter()
     bounds = lower_bound(instance)
-    if "bounds" in _inspect.signature(plan).parameters:
+    accepted = _inspect.signature(plan).parameters
+    if "bounds" in accepted:
         options["bounds"] = bounds
+    if progress is not None and "progress" in accepted:
+        options["progress"] = progress
     result = plan(instance, **options)
     elapsed = _time.perf_counter() - start
     fields = dict(method=method, status=result.status, schedule=result.schedule, metrics=result.metrics,

@@ -13,7 +13,7 @@ from bille.heuristics import astar, lacam, mstar, reconfigure, temporal_astar
 from bille.instances import Instance, OptionError
 from bille.instances.result import Result
 
-from . import bfs, exact
+from . import anytime, bfs, exact
 
 
 def plan_temporal_astar(instance: Instance, *, epsilon: float = 1.0, horizon: int = 5,
@@ -73,5 +73,6 @@ METHODS: dict[str, Callable[..., Result]] = {
     "lacam": plan_lacam,
     "cpsat": exact.plan_cpsat,
     "sat": exact.plan_sat,
+    "anytime": anytime.plan,
     "bfs": bfs.plan,
 }

@@ -4,7 +4,7 @@ Five crowded maps with 2 to 6 robots (bundled ``compare-2`` ... ``compare-6``), 
 S7, joint A* and M* with epsilon in {1, 2, 3}, Temporal A* with epsilon in {1, 2, 3} and H in
 {2, 5, 8}: every run gets the same time limit, runs in its own process, and its schedule is
 validated. Results go to a CSV file, tables like Table I (time steps, tiles traveled, planning
-time, N/A when unsolved) and a log-scale plot of planning time like the figure.
+time; "gave up" or "out of time" when unsolved) and a log-scale plot of planning time like the figure.
 
 Also: Temporal A* with many robots on a large structure (mean replanning time per step).
 """
@@ -99,9 +99,16 @@ def write_csv(rows: list[dict], path: Path) -> None:
         w.writerows(rows)
 
 
+def _unsolved(row: dict | None) -> str:
+    if row is None:
+        return "N/A"
+    return {"unsolved": "gave up", "timeout": "out of time"}.get(row["status"], row["status"])
+
+
 def tables(rows: list[dict], time_limit: float) -> list[str]:
     """Per moveset, like Table I: time steps, tiles traveled and planning time per configuration
-    and number of robots (N/A when unsolved), then planning time as a ratio to M*(eps=1) on the
+    and number of robots ("gave up" when a planner stopped without a schedule before the time
+    limit, "out of time" when the limit ended it), then planning time as a ratio to M*(eps=1) on the
     same map, the baseline of the same run."""
     out = []
     robots = sorted({r["robots"] for r in rows})
@@ -115,7 +122,7 @@ def tables(rows: list[dict], time_limit: float) -> list[str]:
         cell = {(label(r), r["robots"]): r for r in sub}
         for title, field, fmt in metrics:
             out.append(f"{title} ({ms}, time limit {time_limit:g} s)")
-            out += text_table(columns, [[lbl] + [fmt(r[field]) if r and r["solved"] else "N/A"
+            out += text_table(columns, [[lbl] + [fmt(r[field]) if r and r["solved"] else _unsolved(r)
                                                  for r in (cell.get((lbl, m)) for m in robots)] for lbl in labels],
                               right=right)
             out.append("")
@@ -134,8 +141,9 @@ def tables(rows: list[dict], time_limit: float) -> list[str]:
 
 
 def plot(rows: list[dict], time_limit: float, path: Path) -> None:
-    """Planning time per map (log scale), one panel per moveset; unsolved runs as X on the
-    time-limit line (dashed), as in the paper's figure."""
+    """Planning time per map (log scale), one panel per moveset; runs out of time as X on the
+    time-limit line (dashed), as in the paper's figure; runs that gave up before it (status
+    ``unsolved``: a deadlock, no plan) as hollow markers at the time they stopped."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -159,12 +167,14 @@ def plot(rows: list[dict], time_limit: float, path: Path) -> None:
                 x = r["robots"] + offset
                 if r["solved"]:
                     ax.plot(x, max(r["time_s"], 1e-4), marker, color=color, markersize=5)
-                else:
+                elif r["status"] == "timeout":  # out of time: on the time-limit line
                     ax.plot(x, time_limit, "x", color=color, markersize=6, markeredgewidth=1.5)
+                else:  # gave up (deadlock, no plan) before the limit: hollow, at the time it stopped
+                    ax.plot(x, max(r["time_s"], 1e-4), marker, color=color, markersize=6, markerfacecolor="none")
         ax.axhline(time_limit, linestyle="--", color="gray", linewidth=1)
         ax.set_yscale("log")
         ax.set_ylabel("planning time [s]")
-        ax.set_title(f"moveset {ms}  (x: not solved within {time_limit:g} s)", fontsize=10)
+        ax.set_title(f"moveset {ms}  (x: out of time at {time_limit:g} s; hollow: gave up)", fontsize=10)
         ax.set_xticks(sorted({r["robots"] for r in rows}))
         ax.set_xlabel("robots (map compare-m)")
     handles = [plt.Line2D([], [], linestyle="", marker=style[lbl][1], color=style[lbl][0], label=lbl) for lbl in labels]

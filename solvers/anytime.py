@@ -1,0 +1,372 @@
+"""Anytime certified solving: a schedule at once, then a shorter schedule and a higher proved lower
+bound in turn, until they meet (``optimal``) or the time runs out (``feasible``, both numbers).
+
+1. **First schedule**: the one given (``incumbent``), or the shortest the heuristics find in a
+   fifth of the time limit (:func:`.incumbent.first_schedule`): milliseconds on most instances.
+2. Then two searches run side by side, the first in a child process on a second core
+   (``parallel``; without it they take turns in slices of ``slice`` seconds):
+
+   - **Raising the bound**: the exact makespan search of :mod:`.exact` from the static lower
+     bound up, one model per horizon (its pruning is tightest there). An infeasible horizon ``k``
+     proves that no schedule is shorter than ``k + 1``; a satisfiable one is an optimal schedule.
+     An undecided horizon keeps its solver, with what it learned, for the next slice.
+   - **Shortening the schedule**: large neighbourhood search over time windows (after MAPF-LNS,
+     Li et al., IJCAI 2021). A window ``[a, b]`` of the schedule is re-solved exactly with the
+     time-expanded model: from the state at ``a`` (tiles, poses, loads) to exactly the state at
+     ``b`` in fewer than ``b - a`` steps. A solution fits back in place (the rest of the schedule
+     starts from the same state), so the schedule stays valid; the spliced schedule is checked by
+     the validator all the same. The last window ends at the goal instead of the state at ``b``
+     (robots end anywhere the goal allows). A window proved not to shorten is not tried again
+     on the same schedule; when every window of the current length is, the length grows by half,
+     up to the whole schedule (which is then the exact search capped below the incumbent).
+
+Robots subsets as neighbourhoods (fix the other robots' paths) cannot shorten a makespan unless the
+robots they leave out already finish early, so only time windows are searched.
+
+``stats``: ``first`` (method, makespan, seconds), ``improvements`` ([seconds, makespan] for every
+shorter schedule), ``lower_bounds`` ([seconds, bound] for every rise), ``windows`` (tried,
+shortened, proved not to shorten, undecided), and the seconds spent on each search.
+"""
+from __future__ import annotations
+
+import dataclasses
+import multiprocessing
+import time
+from typing import Callable
+
+import numpy as np
+
+from bille.encodings.cnf import SOLVERS, SatBackend
+from bille.encodings.connectivity import connectivity_cuts
+from bille.encodings.model import Options, OutOfTime, build
+from bille.encodings.solution import decode, tiles_at
+from bille.instances import Instance, OptionError, instance_at
+from bille.instances.grid import Grid
+from bille.instances.result import Result
+from bille.instances.rules import goal_violation, run
+from bille.instances.schedule import Schedule
+
+from .bounds import Bounds, lower_bound
+from .incumbent import Incumbent, first_schedule, from_schedule
+
+SAT, UNSAT, UNKNOWN = "sat", "unsat", "unknown"
+try:  # the bound search runs in a forked child process where the platform has fork
+    _FORK = multiprocessing.get_context("fork")
+except ValueError:
+    _FORK = None
+
+
+def plan(instance: Instance, *, time_limit: float = 60.0, window: int = 8, slice: float = 2.0,
+         parallel: bool = True, solver: str = "cadical195", incumbent: Schedule | None = None,
+         bounds: Bounds | None = None, progress: Callable | None = None) -> Result:
+    """Anytime certified solving (module docstring).
+
+    Parameters
+    ----------
+    time_limit : seconds for the whole run (default 60).
+    window : the first window length of the neighbourhood search, in steps (default 8).
+    slice : seconds one window may take; without ``parallel``, the seconds each search runs before
+        the other takes its turn (default 2).
+    parallel : raise the bound in a child process, on a second core, while the parent searches
+        windows (default; where the platform cannot fork, the two take turns).
+    solver : the python-sat solver of both searches (default ``cadical195``).
+    incumbent : a schedule to start from instead of the heuristics' (must be valid).
+    progress : called with ``{"lower": ..., "best": ..., "elapsed": ...}`` whenever either
+        number changes (the command line draws a live line from it).
+    """
+    if solver not in SOLVERS:
+        raise OptionError(f"anytime: unknown solver {solver!r} (expected one of: {', '.join(SOLVERS)})")
+    if window < 2 or slice <= 0:
+        raise OptionError(f"anytime: window must be at least 2 and slice positive, got {window} and {slice}")
+    return _Anytime(instance, time_limit, window, slice, parallel, solver, incumbent, bounds, progress).run()
+
+
+class _Anytime:
+    def __init__(self, instance, time_limit, window, slice_s, parallel, solver, incumbent, bounds, progress):
+        self.instance, self.window, self.slice, self.solver = instance, window, slice_s, solver
+        self.parallel = parallel
+        self.start = time.perf_counter()
+        self.end = self.start + time_limit
+        self.bounds = bounds or lower_bound(instance)
+        self.lower = self.bounds.lower
+        self.progress = progress
+        self.given = incumbent
+        self.best: Incumbent | None = None
+        self.stats = {"improvements": [], "lower_bounds": [],
+                      "windows": {"tried": 0, "shortened": 0, "not_shorter": 0, "undecided": 0},
+                      "bound_s": 0.0, "search_s": 0.0}
+
+    def elapsed(self) -> float:
+        return time.perf_counter() - self.start
+
+    def left(self) -> float:
+        return self.end - time.perf_counter()
+
+    def closed(self) -> bool:
+        return self.best is not None and self.lower >= self.best.makespan
+
+    def report(self) -> None:
+        if self.progress is not None:
+            self.progress({"lower": self.lower, "best": None if self.best is None else self.best.makespan,
+                           "elapsed": self.elapsed()})
+
+    def improve(self, found: Incumbent) -> bool:
+        if self.best is not None and found.makespan >= self.best.makespan:
+            return False
+        self.best = found
+        self.stats["improvements"].append([round(self.elapsed(), 3), found.makespan])
+        self.report()
+        return True
+
+    def raise_lower(self, value: int) -> None:
+        if value > self.lower:
+            self.lower = value
+            self.stats["lower_bounds"].append([round(self.elapsed(), 3), value])
+            self.report()
+
+    # ---- the run -----------------------------------------------------------------------------
+
+    def run(self) -> Result:
+        inst = self.instance
+        if self.bounds.impossible:
+            self.stats["reason"] = "; ".join(self.bounds.impossible)
+            return self.result("infeasible")
+        if goal_violation(inst.world, inst.start_state, inst.goal_tiles, inst.goal_cells, 0) is None:
+            self.best, self.lower = Incumbent(np.zeros((inst.num_robots, 0), np.int64), 0, "none"), 0
+            return self.result("optimal")
+        self._first()
+        rise = _Background(self) if self.parallel and _FORK is not None else _Rise(self)
+        windows = _Windows(self)
+        try:
+            while not self.closed() and self.left() > 0:
+                began = time.perf_counter()
+                rise.step(min(self.end, began + (0 if self.parallel else self.slice)))
+                self.stats["bound_s"] += time.perf_counter() - began
+                if self.closed() or self.best is None or windows.exhausted:
+                    if self.parallel and not self.closed():
+                        rise.wait(min(self.end, time.perf_counter() + self.slice))
+                    continue
+                began = time.perf_counter()
+                windows.step(min(self.end, began + self.slice))
+                self.stats["search_s"] += time.perf_counter() - began
+        finally:
+            rise.close()
+        if self.best is None:
+            return self.result("timeout")
+        return self.result("optimal" if self.closed() else "feasible")
+
+    def _first(self) -> None:
+        if self.given is not None:
+            found = from_schedule(self.instance, self.given, "given")
+            if found is None:
+                raise OptionError(f"anytime: the incumbent schedule is not valid for instance "
+                                  f"'{self.instance.name}' (bille check says why)")
+        else:
+            found = first_schedule(self.instance, max(0.01, min(10.0, 0.2 * self.left())))
+        if found is not None:
+            self.stats["first"] = {"method": found.method, "makespan": found.makespan,
+                                   "s": round(self.elapsed(), 3)}
+            self.improve(found)
+        else:
+            self.report()
+
+    def result(self, status: str) -> Result:
+        for key in ("bound_s", "search_s"):
+            self.stats[key] = round(self.stats[key], 3)
+        schedule = None if self.best is None else Schedule.from_ids(self.instance, self.best.ids,
+                                                                    meta={"method": "anytime"})
+        lower = None if status == "infeasible" else self.lower
+        return Result("anytime", status, schedule, lower_bound=lower, stats=self.stats, time_s=self.elapsed())
+
+
+def _solve(backend: SatBackend, model, instance: Instance, assumptions, deadline) -> str:
+    """Solve, adding connectivity cuts while a solution breaks it (lazily encoded parts)."""
+    while True:
+        status = backend.solve(assumptions, deadline)
+        if status != SAT:
+            return status
+        cuts = connectivity_cuts(model, instance, tiles_at(model, instance, backend.value))
+        if not cuts:
+            return status
+        backend.add_clauses(cuts)
+
+
+class _Rise:
+    """The exact makespan search from the lower bound up, in slices (module docstring)."""
+
+    def __init__(self, run: _Anytime) -> None:
+        self.run, self.k = run, max(1, run.lower)
+        self.model = self.backend = None
+        self.finished = False  # an optimal schedule was found
+
+    def step(self, until: float) -> None:
+        run, inst = self.run, self.run.instance
+        while time.perf_counter() < until and not run.closed():
+            if self.backend is None:
+                try:
+                    self.model = build(inst, self.k, Options(), deadline=run.end)
+                except OutOfTime:
+                    return
+                self.backend = SatBackend(self.model, run.solver)
+            status = _solve(self.backend, self.model, inst, [], until)
+            if status == UNKNOWN:
+                return
+            if status == SAT:  # every horizon below k is infeasible: optimal
+                found = from_schedule(inst, Schedule.from_ids(inst, decode(self.model, inst, self.backend.value)),
+                                      "exact")
+                if found is None:
+                    raise RuntimeError(f"anytime: the exact model gave an invalid schedule at horizon {self.k}")
+                run.improve(found)
+                run.raise_lower(found.makespan)
+                self.finished = True
+                self.close()
+                return
+            run.raise_lower(self.k + 1)
+            self.close()
+            self.k = max(self.k + 1, run.lower)
+
+    def wait(self, until: float) -> None:
+        self.step(until)
+
+    def close(self) -> None:
+        if self.backend is not None:
+            self.backend.delete()
+        self.model = self.backend = None
+
+
+class _Background:
+    """The same search in a child process, on a core of its own: it sends each proved bound, or
+    an optimal schedule, through a pipe; the parent reads them between windows."""
+
+    def __init__(self, run: _Anytime) -> None:
+        self.run = run
+        self.inbox, outbox = _FORK.Pipe(duplex=False)
+        self.child = _FORK.Process(target=_rise_child, args=(run, outbox), daemon=True)
+        self.child.start()
+        outbox.close()
+
+    def step(self, until: float) -> None:
+        self.wait(until)
+
+    def wait(self, until: float) -> None:
+        run = self.run
+        while not run.closed():
+            if not self.inbox.poll(max(0.0, until - time.perf_counter())):
+                return
+            try:
+                kind, value = self.inbox.recv()
+            except EOFError:
+                return
+            if kind == "lower":
+                run.raise_lower(value)
+            else:
+                found = from_schedule(run.instance, Schedule.from_ids(run.instance, np.array(value)), "exact")
+                if found is None:
+                    raise RuntimeError("anytime: the exact model gave an invalid schedule")
+                run.improve(found)
+                run.raise_lower(found.makespan)
+
+    def close(self) -> None:
+        if self.child.is_alive():
+            self.child.terminate()
+        self.child.join()
+        self.inbox.close()
+
+
+def _rise_child(run: _Anytime, outbox) -> None:
+    """The child's loop: raise the bound until the time limit or an optimal schedule."""
+    run.progress = None
+    sent = run.lower
+
+    def send_lower(value):
+        nonlocal sent
+        if value > sent:
+            sent = value
+            outbox.send(("lower", value))
+
+    run.raise_lower = send_lower
+    run.improve = lambda found: outbox.send(("optimal", found.ids.tolist())) or True
+    rise = _Rise(run)
+    while run.left() > 0:
+        rise.step(run.end)
+        if rise.finished:
+            break
+    rise.close()
+    outbox.close()
+
+
+class _Windows:
+    """Large neighbourhood search over time windows of the best schedule (module docstring)."""
+
+    def __init__(self, run: _Anytime) -> None:
+        self.run = run
+        self.length = run.window
+        self.done: set = set()  # (schedule key, a, b) proved not to shorten
+        self.cursor = 0
+        self.exhausted = False  # every window of the best schedule, itself included, proved
+
+    def windows(self, makespan: int) -> list[tuple[int, int]]:
+        w = min(self.length, makespan)
+        stride = max(1, w // 2)
+        out = [(makespan - w, makespan)]  # the tail first: it ends at the goal, the freest window
+        out += [(a, a + w) for a in range(0, makespan - w, stride)]
+        return out
+
+    def step(self, until: float) -> None:
+        run = self.run
+        while time.perf_counter() < until and not run.closed():
+            best = run.best
+            key = best.ids.tobytes()
+            todo = [(a, b) for a, b in self.windows(best.makespan) if (key, a, b) not in self.done]
+            if not todo:
+                if self.length >= best.makespan:
+                    self.exhausted = True  # the whole schedule included: only the bound can close
+                    return
+                self.length = min(best.makespan, self.length + max(1, self.length // 2))
+                continue
+            a, b = todo[self.cursor % len(todo)]
+            self.cursor += 1
+            status = self.shorten(best, a, b, min(run.end, time.perf_counter() + run.slice))
+            if status == UNSAT:
+                self.done.add((key, a, b))
+
+    def shorten(self, best: Incumbent, a: int, b: int, until: float) -> str:
+        run, inst = self.run, self.run.instance
+        counts = run.stats["windows"]
+        counts["tried"] += 1
+        states = [inst.start_state] + list(run_states(inst, best.ids))
+        sub = instance_at(inst, states[a], f"{inst.name}[{a}:{b}]")
+        end = None
+        if b < best.makespan:
+            end = states[b]
+            sub = dataclasses.replace(sub, goal=Grid.from_masks(inst.width, inst.height, inst.start.obstacles,
+                                                                end.tiles))
+        L = b - a - 1
+        if L < 1:
+            return UNSAT
+        try:
+            model = build(sub, L, Options(), min_done=1, deadline=until, end=end)
+        except OutOfTime:
+            counts["undecided"] += 1
+            return UNKNOWN
+        backend = SatBackend(model, run.solver)
+        try:
+            status = _solve(backend, model, sub, [model.done[L]], until)
+            if status != SAT:
+                counts["undecided" if status == UNKNOWN else "not_shorter"] += 1
+                return status
+            k, part = L, decode(model, sub, backend.value)
+            while k > 1 and _solve(backend, model, sub, [model.done[k - 1]], until) == SAT:
+                k, part = k - 1, decode(model, sub, backend.value)
+        finally:
+            backend.delete()
+        ids = np.concatenate([best.ids[:, :a], part[:, :k], best.ids[:, b:]], axis=1)
+        found = from_schedule(inst, Schedule.from_ids(inst, ids), "anytime")
+        if found is not None and run.improve(found):
+            counts["shortened"] += 1
+        return SAT
+
+
+def run_states(instance: Instance, ids: np.ndarray):
+    """The states after each step of a valid schedule's action ids."""
+    return run(instance.world, instance.start_state, ids)
