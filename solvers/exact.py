@@ -22,6 +22,7 @@ search got).
 from __future__ import annotations
 
 import time
+from typing import Callable
 
 import numpy as np
 
@@ -50,7 +51,8 @@ def plan_cpsat(instance: Instance, *, time_limit: float | None = None, threads: 
                presolve: bool = False,
                max_makespan: int | None = None, connectivity: str = "eager", minimize_travel: bool = True,
                prune: bool = True, single_carry: bool = False, first_horizon: int | None = None,
-               incumbent: Schedule | None = None, bounds: Bounds | None = None) -> Result:
+               incumbent: Schedule | None = None, bounds: Bounds | None = None,
+               progress: Callable | None = None) -> Result:
     """Optimal makespan with OR-Tools CP-SAT.
 
     Parameters
@@ -73,18 +75,21 @@ def plan_cpsat(instance: Instance, *, time_limit: float | None = None, threads: 
         horizon below the optimum costs a proof of infeasibility; one at ``T - 1`` is enough).
     incumbent : a schedule to start from (``bille solve --incumbent FILE``); must be valid.
     bounds : the static lower bound, if already computed (``solve()`` passes it).
+    progress : called with ``{"horizon", "answer", "time_s", "elapsed"}`` as each horizon is
+        decided (the command line's live line).
     """
     if first_horizon is not None and first_horizon < 1:
         raise OptionError(f"cpsat: first_horizon must be at least 1, got {first_horizon}")
     return _Search("cpsat", instance, time_limit, max_makespan, connectivity, minimize_travel, prune,
                    single_carry, threads=threads, seed=seed, presolve=presolve,
-                   first_horizon=first_horizon, incumbent=incumbent, bounds=bounds).run()
+                   first_horizon=first_horizon, incumbent=incumbent, bounds=bounds, progress=progress).run()
 
 
 def plan_sat(instance: Instance, *, time_limit: float | None = None, max_makespan: int | None = None,
              connectivity: str = "eager", minimize_travel: bool = True, prune: bool = True,
              single_carry: bool = False, solver: str = "cadical195", chunk: int = 8,
-             incumbent: Schedule | None = None, bounds: Bounds | None = None) -> Result:
+             incumbent: Schedule | None = None, bounds: Bounds | None = None,
+             progress: Callable | None = None) -> Result:
     """Optimal makespan with a SAT solver of python-sat, incremental with assumptions.
 
     Parameters are those of :func:`plan_cpsat`, and: ``solver`` (a python-sat solver name),
@@ -93,7 +98,8 @@ def plan_sat(instance: Instance, *, time_limit: float | None = None, max_makespa
     if solver not in SOLVERS:
         raise OptionError(f"sat: unknown solver {solver!r} (expected one of: {', '.join(SOLVERS)})")
     return _Search("sat", instance, time_limit, max_makespan, connectivity, minimize_travel, prune,
-                   single_carry, solver=solver, chunk=chunk, incumbent=incumbent, bounds=bounds).run()
+                   single_carry, solver=solver, chunk=chunk, incumbent=incumbent, bounds=bounds,
+                   progress=progress).run()
 
 
 class _Search:
@@ -105,6 +111,7 @@ class _Search:
             raise OptionError(f"{method}: connectivity must be one of {', '.join(CONNECTIVITY)}, got {connectivity!r}")
         if kw.get("threads", 1) < 1 or kw.get("chunk", 1) < 1:
             raise OptionError(f"{method}: threads and chunk must be at least 1")
+        self.progress = kw.pop("progress", None)
         self.method, self.instance, self.kw = method, instance, kw
         self.start = time.perf_counter()
         self.deadline = None if time_limit is None else self.start + time_limit
@@ -148,6 +155,12 @@ class _Search:
         if found.makespan <= self.cap:
             self.incumbent, self.cap = found.ids, found.makespan
             self.stats["horizon_cap"] = found.makespan
+
+    def _report(self) -> None:
+        if self.progress is not None:
+            last = self.stats["horizons"][-1]
+            self.progress({"horizon": last["T"], "answer": last["answer"], "time_s": last["time_s"],
+                           "elapsed": time.perf_counter() - self.start})
 
     def result(self, status, ids=None, lower=None) -> Result:
         schedule = None if ids is None else Schedule.from_ids(self.instance, ids, meta={"method": self.method})
@@ -205,6 +218,7 @@ class _Search:
                 if status != SAT or self._check(backend, model):
                     break
             self.stats["horizons"][-1].update(answer=status, time_s=round(time.perf_counter() - began, 3))
+            self._report()
             if status == UNKNOWN:
                 return self.timeout(proved_below)
             if status == UNSAT:
@@ -284,6 +298,7 @@ class _Search:
                     self.stats["horizons"].append({"T": k, "model_horizon": T, "variables": backend.top,
                                                    "clauses": backend.num_clauses, "answer": status,
                                                    "time_s": round(time.perf_counter() - began, 3)})
+                    self._report()
                     if status == UNKNOWN:
                         return self.timeout(k)
                     if status == SAT:

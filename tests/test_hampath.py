@@ -107,7 +107,24 @@ def test_gen_hampath_on_the_command_line(tmp_path, capsys, cli):
     assert instance_from_text(out.read_text()).meta["bound"] == bound(3, 2)
     capsys.readouterr()
     assert cli(["gen", "hampath", str(tmp_path / "l.graph"), "--start", "1,0", "--search", "--json"]) == 0
-    assert '"optimal_is_bound": false' in capsys.readouterr().out
+    captured = capsys.readouterr()
+    assert '"optimal_is_bound": false' in captured.out
+    assert f"no schedule within the bound {bound(3, 1)}" in captured.err  # from the middle: no path
+
+
+def test_gen_hampath_search_prints_the_verdict_and_writes_the_witness(tmp_path, capsys, cli):
+    (tmp_path / "l.graph").write_text("oo\n.o\n")
+    out, witness = tmp_path / "l.yaml", tmp_path / "l.schedule.yaml"
+    assert cli(["gen", "hampath", str(tmp_path / "l.graph"), "--search", "-o", str(out),
+                "--schedule", str(witness)]) == 0
+    err = capsys.readouterr().err
+    inst = instance_from_text(out.read_text())
+    assert inst.meta["optimum"] == inst.meta["bound"] == bound(3, 1) and f"optimal makespan {bound(3, 1)}" in err
+    from bille.instances.schedule import load_schedule
+    from bille.solvers import validate
+
+    report = validate(inst, load_schedule(witness))
+    assert report.valid and report.metrics.makespan == inst.meta["optimum"]
 
 
 @pytest.mark.parametrize("argv, message", [
@@ -117,6 +134,7 @@ def test_gen_hampath_on_the_command_line(tmp_path, capsys, cli):
     (["gen", "hampath", "{tmp}/l.graph", "--start", "7,7"], "not a vertex"),
     (["gen", "hampath", "{tmp}/l.graph", "--start", "x"], "expected X,Y"),
     (["gen", "hampath", "{tmp}/l.graph", "-m", "2", "--search"], "one robot"),
+    (["gen", "hampath", "{tmp}/l.graph", "--schedule", "{tmp}/s.yaml"], "--schedule needs --search"),
 ])
 def test_bad_hampath_input_is_one_line_and_exit_2(tmp_path, rejects, argv, message):
     (tmp_path / "split.graph").write_text("o.o\n")

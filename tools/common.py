@@ -34,6 +34,36 @@ def stderr_console():
     return Console(stderr=True)
 
 
+class LiveLine:
+    """One line on the terminal, rewritten in place as a long solve goes (stderr, only when it is
+    a terminal; silent otherwise, and with ``--json``). Used as the ``progress`` of ``solve()``."""
+
+    def __init__(self, method: str, enabled: bool) -> None:
+        import sys
+
+        self.method, self.stream = method, sys.stderr
+        self.enabled = enabled and self.stream.isatty()
+        self.width = 0
+
+    def __call__(self, event: dict) -> None:
+        if not self.enabled:
+            return
+        if "horizon" in event:
+            text = f"{self.method}: horizon {event['horizon']} {event['answer']} in {event['time_s']:.1f} s"
+        else:
+            best = "-" if event["best"] is None else event["best"]
+            text = f"{self.method}: makespan in [{event['lower']}, {best}]"
+        text += f", {event['elapsed']:.1f} s elapsed"
+        self.stream.write("\r" + text.ljust(self.width))
+        self.stream.flush()
+        self.width = len(text)
+
+    def close(self) -> None:
+        if self.enabled and self.width:
+            self.stream.write("\r" + " " * self.width + "\r")
+            self.stream.flush()
+
+
 def writable(*paths) -> None:
     """Fail before any work when an output file cannot be created (a missing folder, a folder
     in its place, no permission)."""

@@ -1,73 +1,213 @@
-"""The gap report: heuristics against the exact optimum on the same instances.
+"""The gap report: methods (and schedule files) against the best proved lower bound on the same
+instances.
 
-For every instance, every method runs under the same time limit; the optimum is the makespan an
-exact method proved optimal, and each method's gap is how much longer its makespan is, in percent.
-Methods that do not apply to an instance (joint A* on a reconfiguration instance; Temporal A* and
-M* run the reconfiguration loop there) are listed as ``n/a`` with the reason.
+Every method configuration runs on every instance under the same time limit. Per instance:
+
+- ``lower_bound``: the best lower bound on the makespan proved by anything in the run: each
+  method's own (``solve()`` reports the static bound at least, an exact or anytime search more),
+  and a known optimum or bound in the instance's metadata (``optimum`` or ``lower_bound``; the
+  generators write them where they are proved, e.g. ``bille gen hampath --search``);
+- ``best``: the shortest valid schedule of the run;
+- per row, ``certified_gap_percent`` = (makespan - lower_bound) / lower_bound: how much longer
+  the schedule is than the optimum *at most*, whatever the optimum; and ``gap_percent``, the
+  exact gap, where some method proved the optimum.
+
+Method configurations are ``name`` or ``name:option=value,option=value`` (the short names ``H``
+and ``d-tr`` of the command line work too). Methods that do not apply to an instance are listed
+as ``n/a`` with the reason; two exact methods that disagree on an optimum stop the report.
 """
 from __future__ import annotations
 
 import csv
+import statistics
+from dataclasses import dataclass, field
 from pathlib import Path
 
+import yaml
+
 from bille.instances import BilleError, Instance, OptionError
-from bille.solvers import solve
+from bille.solvers import METHODS, solve, validate
+from bille.solvers.options import check_options
 
 from .tables import text_table
 
 DEFAULT_METHODS = ("temporal-astar", "mstar", "astar", "cpsat", "sat")
-EXACT = ("cpsat", "sat", "bfs")
-FIELDS = ["instance", "method", "status", "makespan", "tiles_traveled", "time_s", "gap_percent", "note"]
+EXACT = ("cpsat", "sat", "bfs", "anytime")
+FIELDS = ["instance", "method", "status", "makespan", "own_lower_bound", "lower_bound", "best", "tiles_traveled",
+          "time_s", "gap_percent", "certified_gap_percent", "note"]
+ALIASES = {"H": "horizon", "d-tr": "d_tr", "eps": "epsilon"}
+SHOWN_STATUS = {"unsolved": "gave up", "timeout": "out of time"}
 
 
-def run(instances: list[Instance], methods, time_limit: float, threads: int = 1, progress=None,
-        schedules: dict | None = None) -> list[dict]:
-    """One row per instance and method; ``schedules``, if given, receives every schedule found
-    under ``(instance name, method)``."""
+@dataclass
+class Config:
+    """A method with options, labelled as the user wrote it."""
+
+    label: str
+    method: str
+    options: dict = field(default_factory=dict)
+
+
+def parse_configs(text: str) -> list[Config]:
+    """``"temporal-astar:H=10,load_transfer=true,mstar"`` -> two configurations: a token with
+    ``=`` and no ``:`` continues the options of the configuration before it. Raises
+    :class:`OptionError` naming what is wrong."""
+    configs: list[Config] = []
+    for token in (t.strip() for t in text.split(",")):
+        if not token:
+            continue
+        if "=" in token and ":" not in token.split("=", 1)[0]:
+            if not configs:
+                raise OptionError(f"option {token!r} comes before any method")
+            _add_option(configs[-1], token)
+            continue
+        name, _, first = token.partition(":")
+        if name not in METHODS:
+            raise OptionError(f"unknown method {name!r} (expected one of: {', '.join(METHODS)})")
+        configs.append(Config(name, name))
+        if first:
+            _add_option(configs[-1], first)
+    if not configs:
+        raise OptionError(f"no method named in {text!r}")
+    for c in configs:  # a wrong option is bad input, found before anything runs
+        check_options(c.method, METHODS[c.method], c.options, internal=("bounds", "progress"))
+    return configs
+
+
+def _add_option(config: Config, token: str) -> None:
+    name, sep, value = token.partition("=")
+    if not sep or not name.strip():
+        raise OptionError(f"expected OPTION=VALUE after '{config.method}:', got {token!r}")
+    name = name.strip()
+    try:
+        config.options[ALIASES.get(name, name).replace("-", "_")] = yaml.safe_load(value)
+    except yaml.YAMLError:
+        raise OptionError(f"cannot read the value of {token!r}") from None
+    config.label += (":" if config.label == config.method else ",") + token.strip()
+
+
+def known_lower_bound(inst: Instance) -> tuple[int | None, str]:
+    """A lower bound carried by the instance's metadata, and where it comes from."""
+    meta = inst.meta or {}
+    for key in ("optimum", "lower_bound"):
+        if isinstance(meta.get(key), int) and not isinstance(meta.get(key), bool):
+            return meta[key], f"metadata {key}"
+    return None, ""
+
+
+def run(instances: list[Instance], configs: list[Config], time_limit: float, threads: int = 1, progress=None,
+        schedules: dict | None = None, files: dict | None = None) -> list[dict]:
+    """One row per instance and configuration, then one per schedule file valid for the instance
+    (``files``: label -> Schedule; see :func:`check_files`). ``schedules``, if given, receives every schedule found under
+    ``(instance name, label)``."""
     rows = []
     for inst in instances:
-        mine = []
-        for method in methods:
-            if progress:
-                progress(inst.name, method)
-            options = {"time_limit": time_limit}
-            if method == "cpsat":
-                options["threads"] = threads
-            try:
-                result = solve(inst, method, **options)
-            except OptionError as exc:
-                mine.append(dict(instance=inst.name, method=method, status="n/a", makespan=None,
-                                 tiles_traveled=None, time_s=None, gap_percent=None, note=str(exc)))
-                continue
-            m = result.metrics
-            if schedules is not None and result.schedule is not None:
-                schedules[inst.name, method] = result.schedule
-            note = result.stats.get("failure") or result.stats.get("reason") or ""
-            if not note and "objective" in result.stats:
-                note = "walking only: optimizes the sum of costs"
-            mine.append(dict(instance=inst.name, method=method, status=result.status,
-                             makespan=m.makespan if m else None, tiles_traveled=m.tiles_traveled if m else None,
-                             time_s=round(result.time_s, 3), gap_percent=None, note=note))
-        proved = {r["makespan"] for r in mine if r["method"] in EXACT and r["status"] == "optimal"}
-        if len(proved) > 1:  # two exact methods disagree: a bug, never hide it
-            raise BilleError(f"{inst.name}: exact methods disagree on the optimal makespan: {sorted(proved)}")
-        if proved:
-            opt = proved.pop()
-            for r in mine:
-                if r["makespan"] is not None:
-                    r["gap_percent"] = round(100.0 * (r["makespan"] - opt) / opt, 1) if opt else 0.0
+        mine = [_solve_row(inst, c, time_limit, threads, progress, schedules) for c in configs]
+        for label, schedule in (files or {}).items():
+            if schedule.num_robots == inst.num_robots and validate(inst, schedule).valid:
+                mine.append(_file_row(inst, label, schedule, schedules))
+        _certify(inst, mine)
         rows += mine
     return rows
 
 
-def table(rows: list[dict]) -> list[str]:
-    def show(v, fmt="{}"):
-        return None if v is None else fmt.format(v)
+def check_files(instances: list[Instance], files: dict) -> None:
+    """Raise :class:`OptionError` for a schedule file valid for none of the instances."""
+    for label, schedule in files.items():
+        reasons = []
+        for inst in instances:
+            if schedule.num_robots != inst.num_robots:
+                reasons.append(f"{inst.name}: {inst.num_robots} robots, the schedule has {schedule.num_robots}")
+                continue
+            report = validate(inst, schedule)
+            if report.valid:
+                break
+            reasons.append(f"{inst.name}: {report.violation}")
+        else:
+            raise OptionError(f"{label} is valid for none of the instances ({'; '.join(reasons)})")
 
-    columns = ["instance", "method", "status", "makespan", "tiles", "time [s]", "gap", "note"]
-    return text_table(columns, [[r["instance"], r["method"], r["status"], r["makespan"], r["tiles_traveled"],
-                                 show(r["time_s"], "{:.3f}"), show(r["gap_percent"], "{:+.1f}%"), _short(r["note"])]
-                                for r in rows], right={"makespan", "tiles", "time [s]", "gap"})
+
+def _row(inst, label, status, metrics=None, lower=None, time_s=None, note="") -> dict:
+    return dict(instance=inst.name, method=label, status=status, makespan=metrics.makespan if metrics else None,
+                own_lower_bound=lower, lower_bound=None, best=None,
+                tiles_traveled=metrics.tiles_traveled if metrics else None, time_s=time_s, gap_percent=None,
+                certified_gap_percent=None, note=note)
+
+
+def _solve_row(inst, config: Config, time_limit, threads, progress, schedules) -> dict:
+    if progress:
+        progress(inst.name, config.label)
+    options = {"time_limit": time_limit, **config.options}
+    if config.method == "cpsat" and "threads" not in config.options:
+        options["threads"] = threads
+    try:
+        result = solve(inst, config.method, **options)
+    except OptionError as exc:
+        return _row(inst, config.label, "n/a", note=str(exc))
+    if schedules is not None and result.schedule is not None:
+        schedules[inst.name, config.label] = result.schedule
+    note = result.stats.get("failure") or result.stats.get("reason") or ""
+    if not note and "objective" in result.stats:
+        note = "walking only: optimizes the sum of costs"
+    return _row(inst, config.label, result.status, result.metrics, result.lower_bound, round(result.time_s, 3), note)
+
+
+def _file_row(inst, label, schedule, schedules) -> dict:
+    report = validate(inst, schedule)
+    if schedules is not None:
+        schedules[inst.name, label] = schedule
+    return _row(inst, label, "given", report.metrics, note="schedule file")
+
+
+def _certify(inst: Instance, rows: list[dict]) -> None:
+    proved = {r["makespan"] for r in rows if r["status"] == "optimal" and r["makespan"] is not None
+              and r["method"].split(":")[0] in EXACT and "walking only" not in r["note"]}
+    if len(proved) > 1:  # two exact methods disagree: a bug, never hide it
+        raise BilleError(f"{inst.name}: exact methods disagree on the optimal makespan: {sorted(proved)}")
+    known, _ = known_lower_bound(inst)
+    lowers = [r["own_lower_bound"] for r in rows if r["own_lower_bound"] is not None] + [known]
+    lower = max((v for v in lowers if v is not None), default=None)
+    spans = [r["makespan"] for r in rows if r["makespan"] is not None]
+    best = min(spans, default=None)
+    if lower is not None and best is not None and lower > best:
+        raise BilleError(f"{inst.name}: a lower bound of {lower} above a valid schedule of {best} steps")
+    optimum = proved.pop() if proved else (best if best is not None and best == lower else None)
+    for r in rows:
+        r["lower_bound"], r["best"] = lower, best
+        if r["makespan"] is None:
+            continue
+        if optimum is not None:
+            r["gap_percent"] = _percent(r["makespan"], optimum)
+        if lower is not None:
+            r["certified_gap_percent"] = _percent(r["makespan"], lower)
+
+
+def _percent(makespan: int, base: int) -> float:
+    return round(100.0 * (makespan - base) / base, 1) if base else 0.0
+
+
+def table(rows: list[dict]) -> list[str]:
+    columns = ["instance", "method", "status", "makespan", "LB", "best", "tiles", "time [s]", "gap", "certified",
+               "note"]
+    return text_table(columns, [[r["instance"], r["method"], SHOWN_STATUS.get(r["status"], r["status"]),
+                                 r["makespan"], r["lower_bound"], r["best"], r["tiles_traveled"],
+                                 _show(r["time_s"], "{:.3f}"), _show(r["gap_percent"], "{:+.1f}%"),
+                                 _show(r["certified_gap_percent"], "<= {:.1f}%"), _short(r["note"])]
+                                for r in rows],
+                      right={"makespan", "LB", "best", "tiles", "time [s]", "gap", "certified"})
+
+
+def summary(rows: list[dict]) -> list[str]:
+    """Per method: instances with a schedule, median and worst certified gap over them."""
+    out = []
+    for method in dict.fromkeys(r["method"] for r in rows):
+        mine = [r for r in rows if r["method"] == method and r["status"] != "n/a"]
+        gaps = [r["certified_gap_percent"] for r in mine if r["certified_gap_percent"] is not None]
+        solved = sum(r["makespan"] is not None for r in mine)
+        out.append([method, f"{solved}/{len(mine)}", _show(statistics.median(gaps) if gaps else None, "{:.1f}%"),
+                    _show(max(gaps) if gaps else None, "{:.1f}%")])
+    return text_table(["method", "schedules", "median certified gap", "worst"], out,
+                      right={"schedules", "median certified gap", "worst"})
 
 
 def write_csv(rows: list[dict], path: Path) -> None:
@@ -79,6 +219,10 @@ def write_csv(rows: list[dict], path: Path) -> None:
     w.writeheader()
     w.writerows(rows)
     write_atomic(path, buf.getvalue(), BilleError)
+
+
+def _show(v, fmt="{}"):
+    return None if v is None else fmt.format(v)
 
 
 def _short(note: str) -> str:

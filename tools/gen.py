@@ -7,6 +7,8 @@ import click
 
 from bille.instances import InstanceError, dump_instance, save_instance
 
+from .common import writable
+
 EXIT_OK = 0
 
 
@@ -138,20 +140,46 @@ def _vertex(text: str | None, option: str = "--start"):
               help="Corollary 1: this many copies, one robot each.")
 @click.option("--moveset", default="point", show_default=True)
 @click.option("--search", is_flag=True, help="Also decide by exhaustive search whether the optimal makespan is the "
-                                             "bound (small graphs only; one robot, point).")
+                                             "bound (small graphs only; one robot, point); the verdict goes to stderr.")
+@click.option("--schedule", "schedule_file", type=click.Path(dir_okay=False),
+              help="With --search: write the optimal schedule found here.")
 @common
-def gen_hampath(graph_file, vertices, scale, start, robots, moveset, search, seed, output, as_json) -> int:
+def gen_hampath(graph_file, vertices, scale, start, robots, moveset, search, schedule_file, seed, output,
+                as_json) -> int:
     """Theorem 1's reduction from Hamiltonian path: a vertex gadget per vertex of GRAPH, edge
-    tiles between adjacent ones; the bound (s + 7)(|V| - 1) + t_g |V| is in the metadata."""
+    tiles between adjacent ones; the bound (s + 7)(|V| - 1) + t_g |V| is in the metadata.
+
+    With --search, the metadata also get the answer: ``optimum`` (a schedule within the bound
+    exists; the shortest is optimal) or ``lower_bound`` (none within the bound: bound + 1), which
+    ``bille gap`` uses as a proved bound."""
     from bille.instances.generators.hampath import reduction, search_optimum
 
+    if schedule_file and not search:
+        raise click.UsageError("--schedule needs --search (the schedule is the one the search finds)")
+    writable(output, schedule_file)
     inst = reduction(_graph(graph_file, vertices, seed), scale, start=_vertex(start), robots=robots,
                      moveset=moveset)
     if search:
         if robots != 1 or inst.meta["bound"] is None:
             raise click.UsageError("--search takes one robot with the point moveset")
-        found = search_optimum(inst, inst.meta["bound"])
-        inst.meta["optimal_is_bound"] = found is not None and found.length == inst.meta["bound"]
+        bound = inst.meta["bound"]
+        found = search_optimum(inst, bound)
+        inst.meta["optimal_is_bound"] = found is not None and found.length == bound
+        if found is None:
+            inst.meta["lower_bound"] = bound + 1
+            click.echo(f"{inst.name}: no schedule within the bound {bound}: the optimal makespan is at least "
+                       f"{bound + 1} (no Hamiltonian path from the start vertex)", err=True)
+        else:
+            inst.meta["optimum"] = found.length
+            click.echo(f"{inst.name}: optimal makespan {found.length} (the bound is {bound}; "
+                       f"{'equal' if found.length == bound else 'below it'})", err=True)
+            if schedule_file:
+                from bille.instances.schedule import save_schedule
+
+                save_schedule(found, schedule_file)
+                click.echo(f"{inst.name}: optimal schedule written to {schedule_file}", err=True)
+        if schedule_file and found is None:
+            click.echo(f"{inst.name}: no schedule to write to {schedule_file}", err=True)
     return _output(inst, output, as_json)
 
 

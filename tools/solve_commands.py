@@ -6,7 +6,8 @@ import yaml
 
 from bille.solvers import METHODS, save_schedule, solve
 
-from .common import EXIT_NO, EXIT_OK, instance_arg, print_json, record_traces, trace_of, writable
+from .common import (EXIT_NO, EXIT_OK, LiveLine, instance_arg, label_of, print_json, record_traces, schedule_arg,
+                     trace_of, writable)
 
 
 @click.command("solve")
@@ -21,12 +22,15 @@ from .common import EXIT_NO, EXIT_OK, instance_arg, print_json, record_traces, t
 @click.option("--d-tr", type=click.IntRange(min=0), help="Manhattan distance within which robots consider a load transfer.")
 @click.option("-O", "--option", "extra", multiple=True, metavar="NAME=VALUE",
               help="Another option of the method, e.g. -O od=false or -O max_steps=200.")
+@click.option("--incumbent", metavar="SCHEDULE",
+              help="A valid schedule to start from (cpsat, sat, anytime): it caps the search and is "
+                   "returned if time runs out.")
 @click.option("-o", "--output", type=click.Path(dir_okay=False), help="Write the schedule here.")
 @click.option("--rerun", "rrd", type=click.Path(dir_okay=False), metavar="OUT.rrd",
               help="Write a rerun recording of the schedule found.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of text.")
-def solve_(instance: str, method: str, epsilon, horizon, time_limit, threads, load_transfer, d_tr, extra, output, rrd,
-           as_json) -> int:
+def solve_(instance: str, method: str, epsilon, horizon, time_limit, threads, load_transfer, d_tr, extra, incumbent,
+           output, rrd, as_json) -> int:
     """Solve INSTANCE with METHOD; print the status and metrics (exit 1 if no schedule).
 
     On an instance that moves tiles, temporal-astar and mstar run the reconfiguration loop: the
@@ -39,7 +43,13 @@ def solve_(instance: str, method: str, epsilon, horizon, time_limit, threads, lo
     options = {k: v for k, v in given.items() if v is not None}
     options.update(_parse_options(extra))
     inst = instance_arg(instance)
-    result = solve(inst, method, **options)
+    if incumbent is not None:
+        options["incumbent"] = schedule_arg(incumbent)
+    line = LiveLine(method, not as_json)
+    try:
+        result = solve(inst, method, progress=line, **options)
+    finally:
+        line.close()
     if output and result.schedule is not None:
         save_schedule(result.schedule, output)
     if rrd:  # without a schedule the recording shows the instance
@@ -118,7 +128,10 @@ def _explain(inst, key: str, value) -> str:
 @click.command()
 @click.argument("instances", nargs=-1)
 @click.option("--methods", default=",".join(("temporal-astar", "mstar", "astar", "cpsat", "sat")), show_default=True,
-              help="Comma-separated methods.")
+              help="Comma-separated method configurations: NAME or NAME:OPTION=VALUE,OPTION=VALUE "
+                   "(e.g. temporal-astar:H=10,load_transfer=true,mstar).")
+@click.option("--schedule", "schedule_files", multiple=True, metavar="SCHEDULE",
+              help="Also a schedule file as a row, on every instance with its number of robots (repeatable).")
 @click.option("--time-limit", type=click.FloatRange(min=0, min_open=True), default=60.0, show_default=True,
               help="Seconds per method and instance.")
 @click.option("--threads", type=click.IntRange(min=1), default=2, show_default=True, help="CP-SAT workers.")
@@ -127,28 +140,35 @@ def _explain(inst, key: str, value) -> str:
 @click.option("--rerun", "rrd", type=click.Path(dir_okay=False), metavar="OUT.rrd",
               help="Write every schedule found to one rerun recording, side by side per instance.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of the table.")
-def gap(instances, methods: str, time_limit: float, threads: int, csv_path: str, rrd: str | None, as_json: bool) -> int:
-    """How far the heuristics are from the exact optimum: one table over INSTANCES (default:
-    the bundled point-4), with each method's makespan gap to the proved optimum."""
+def gap(instances, methods: str, schedule_files, time_limit: float, threads: int, csv_path: str, rrd: str | None,
+        as_json: bool) -> int:
+    """How far methods are from the optimum: one table over INSTANCES (default: the bundled
+    point-4) with each schedule's makespan, the best lower bound proved in the run (or carried
+    by the instance), and the certified gap (makespan - bound) / bound; then a summary per method."""
     from pathlib import Path
 
-    from .gap import run, table, write_csv
+    from bille.instances import OptionError
 
-    names = [m.strip() for m in methods.split(",") if m.strip()]
-    if not names:
-        raise click.BadParameter(f"no method named in {methods!r}", param_hint="--methods")
-    for name in names:
-        if name not in METHODS:
-            raise click.BadParameter(f"unknown method {name!r} (expected: {', '.join(METHODS)})", param_hint="--methods")
+    from .gap import check_files, parse_configs, run, summary, table, write_csv
+
+    try:
+        configs = parse_configs(methods)
+    except OptionError as exc:
+        raise click.BadParameter(str(exc), param_hint="--methods") from None
     writable(csv_path, rrd)
     loaded = [instance_arg(arg) for arg in (instances or ("point-4",))]
+    files = {label_of(f): schedule_arg(f) for f in schedule_files}
+    try:
+        check_files(loaded, files)
+    except OptionError as exc:
+        raise click.BadParameter(str(exc), param_hint="--schedule") from None
 
     def progress(inst, method):
         if not as_json:
             click.echo(f"  running {method} on {inst} ...", err=True)
 
     schedules: dict = {}
-    rows = run(loaded, names, time_limit, threads, progress, schedules=schedules)
+    rows = run(loaded, configs, time_limit, threads, progress, schedules=schedules, files=files)
     write_csv(rows, Path(csv_path))
     if rrd:
         by_name = {inst.name: inst for inst in loaded}
@@ -160,5 +180,8 @@ def gap(instances, methods: str, time_limit: float, threads: int, csv_path: str,
     else:
         for line in table(rows):
             click.echo(line)
-        click.echo(f"written to {csv_path}")
+        click.echo("")
+        for line in summary(rows):
+            click.echo(line)
+        click.echo(f"written to {csv_path}" + (f" and {rrd}" if rrd else ""))
     return EXIT_OK

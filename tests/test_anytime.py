@@ -1,0 +1,120 @@
+"""Anytime certified solving, incumbents, honest statuses and the gap report, against the
+brute-force search on tiny instances."""
+import dataclasses
+import json
+
+import numpy as np
+import pytest
+
+from bille.instances import load_instance
+from bille.instances.bundled import bundled_path
+from bille.instances.moveset import Kind
+from bille.instances.schedule import Schedule, bind, save_schedule
+from bille.solvers import anytime, solve, validate
+from bille.solvers.bfs import plan as bfs
+from tinyworlds import tiny_instances
+
+OPTIMA = {}
+for _inst in tiny_instances(16, first_seed=500, max_robots=2):
+    _ref = bfs(_inst, max_states=20_000)
+    if _ref.status == "optimal" and len(OPTIMA) < 6:
+        OPTIMA[_inst] = _ref.lower_bound  # the brute force's proved optimum
+SOLVABLE = list(OPTIMA)
+
+
+def _monotone(stats, optimum):
+    spans = [m for _, m in stats["improvements"]]
+    lowers = [b for _, b in stats["lower_bounds"]]
+    assert spans == sorted(spans, reverse=True) and len(set(spans)) == len(spans)
+    assert lowers == sorted(lowers) and all(b <= optimum for b in lowers)
+
+
+def test_tiny_instances_are_solvable():
+    assert len(SOLVABLE) >= 5
+
+
+@pytest.mark.parametrize("parallel", [False, True])
+@pytest.mark.parametrize("k", range(3))
+def test_anytime_proves_the_brute_force_optimum(k, parallel):
+    inst = SOLVABLE[k + (3 if parallel else 0)]
+    optimum = OPTIMA[inst]
+    seen = []
+    result = solve(inst, "anytime", time_limit=60, parallel=parallel, progress=seen.append)
+    assert result.status == "optimal", result.stats
+    assert validate(inst, result.schedule).valid
+    assert result.metrics.makespan == result.lower_bound == optimum
+    _monotone(result.stats, optimum)
+    assert seen and all(e["lower"] <= optimum for e in seen)
+
+
+def _padded(inst, schedule, waits):
+    """The schedule with ``waits`` joint waits inserted after its first step."""
+    ids = bind(inst, schedule)
+    wait = [int(np.flatnonzero(g.kind == Kind.WAIT)[0]) for g in inst.world.graphs]
+    pad = np.array([wait] * waits, dtype=np.int64).T
+    return Schedule.from_ids(inst, np.concatenate([ids[:, :1], pad, ids[:, 1:]], axis=1))
+
+
+def test_the_windows_shorten_a_padded_schedule_to_the_optimum(monkeypatch):
+    monkeypatch.setattr(anytime._Rise, "step", lambda self, until: None)  # no bound search: windows only
+    inst = load_instance(bundled_path("corridor-2"))
+    optimal = solve(inst, "sat", minimize_travel=False)
+    padded = _padded(inst, optimal.schedule, 5)
+    assert validate(inst, padded).metrics.makespan == optimal.metrics.makespan + 5
+    result = solve(inst, "anytime", time_limit=6, parallel=False, incumbent=padded)
+    assert result.status in ("optimal", "feasible")
+    assert validate(inst, result.schedule).valid
+    assert result.metrics.makespan == optimal.metrics.makespan
+    assert result.stats["windows"]["shortened"] >= 1 and result.stats["first"]["method"] == "given"
+    _monotone(result.stats, optimal.metrics.makespan)
+
+
+def test_an_impossible_instance_is_infeasible_with_no_bound():
+    from helpers import make
+
+    walled = make("TT#..\nTT#..", [{"at": [0, 0]}], goal="..#TT\n..#TT", moveset="point")
+    result = solve(walled, "anytime", time_limit=5)
+    assert result.status == "infeasible" and result.schedule is None and result.lower_bound is None
+
+
+def test_gave_up_and_out_of_time_are_told_apart():
+    deadlock = solve(load_instance(bundled_path("crowded-2")), "temporal-astar", time_limit=60)
+    assert deadlock.status == "unsolved" and deadlock.stats["failure"] == "deadlock" and deadlock.time_s < 60
+    late = solve(load_instance(bundled_path("compare-6")), "mstar", time_limit=0.05)
+    assert late.status == "timeout" and late.schedule is None and late.lower_bound is not None
+
+
+def test_gap_takes_options_a_schedule_file_and_keeps_a_timeouts_bound(tmp_path, capsys):
+    from bille.tools.cli import main
+
+    inst = load_instance(bundled_path("compare-3"))
+    mine = tmp_path / "mine.yaml"
+    save_schedule(solve(inst, "temporal-astar").schedule, mine)
+    out_csv = tmp_path / "gap.csv"
+    with pytest.raises(SystemExit) as done:
+        main(["gap", "compare-3", "compare-6", "--methods", "temporal-astar:H=2,epsilon=2,mstar:time_limit=0.05",
+              "--schedule", str(mine), "--csv", str(out_csv), "--json"])
+    assert done.value.code == 0
+    rows = {(r["instance"], r["method"]): r for r in json.loads(capsys.readouterr().out)["rows"]}
+    assert set(rows) == {(i, m) for i in ("compare-3", "compare-6")
+                         for m in ("temporal-astar:H=2,epsilon=2", "mstar:time_limit=0.05")} | {("compare-3", "mine")}
+    late = rows["compare-6", "mstar:time_limit=0.05"]
+    assert late["status"] == "timeout" and late["makespan"] is None
+    assert late["own_lower_bound"] is not None and late["lower_bound"] >= late["own_lower_bound"]
+    given = rows["compare-3", "mine"]
+    lower = given["lower_bound"]
+    assert given["status"] == "given" and lower <= given["makespan"]
+    assert given["certified_gap_percent"] == round(100 * (given["makespan"] - lower) / lower, 1)
+    header = out_csv.read_text().splitlines()[0].split(",")
+    assert header[:6] == ["instance", "method", "status", "makespan", "own_lower_bound", "lower_bound"]
+    assert "certified_gap_percent" in header
+
+
+def test_gap_uses_a_bound_from_the_metadata():
+    from bille.tools.gap import Config, run
+
+    inst = load_instance(bundled_path("compare-3"))
+    optimum = solve(inst, "sat").metrics.makespan
+    inst = dataclasses.replace(inst, meta={"optimum": optimum})
+    rows = run([inst], [Config("temporal-astar", "temporal-astar")], 60)
+    assert rows[0]["lower_bound"] == optimum and rows[0]["certified_gap_percent"] == rows[0]["gap_percent"]
