@@ -50,8 +50,8 @@ def default_cap(lower: int) -> int:
 def plan_cpsat(instance: Instance, *, time_limit: float | None = None, threads: int = 1, seed: int = 0,
                presolve: bool = False,
                max_makespan: int | None = None, connectivity: str = "eager", minimize_travel: bool = True,
-               prune: bool = True, single_carry: bool = False, first_horizon: int | None = None,
-               incumbent: Schedule | None = None, bounds: Bounds | None = None,
+               prune: bool = True, prune_tiles: bool = True, single_carry: bool = False,
+               first_horizon: int | None = None, incumbent: Schedule | None = None, bounds: Bounds | None = None,
                progress: Callable | None = None) -> Result:
     """Optimal makespan with OR-Tools CP-SAT.
 
@@ -68,6 +68,8 @@ def plan_cpsat(instance: Instance, *, time_limit: float | None = None, threads: 
         or ``lazy`` (cuts on demand).
     minimize_travel : then minimize tiles traveled at the optimal makespan.
     prune : reachability and candidate-cell pruning (switch off to measure them).
+    prune_tiles : the reachability in time with the tiles (:mod:`bille.encodings.reach`), part of
+        ``prune``; off alone, the encoding as it was before it (``bille bench exact`` compares).
     single_carry : only schedules that carry every tile once, from a start-only cell straight to
         a goal-only cell (no hand-over): the best such makespan (see ``encodings.model.Options``).
     first_horizon : a guess of the optimal makespan: the search starts there, going down while
@@ -80,13 +82,13 @@ def plan_cpsat(instance: Instance, *, time_limit: float | None = None, threads: 
     """
     if first_horizon is not None and first_horizon < 1:
         raise OptionError(f"cpsat: first_horizon must be at least 1, got {first_horizon}")
-    return _Search("cpsat", instance, time_limit, max_makespan, connectivity, minimize_travel, prune,
+    return _Search("cpsat", instance, time_limit, max_makespan, connectivity, minimize_travel, (prune, prune_tiles),
                    single_carry, threads=threads, seed=seed, presolve=presolve,
                    first_horizon=first_horizon, incumbent=incumbent, bounds=bounds, progress=progress).run()
 
 
 def plan_sat(instance: Instance, *, time_limit: float | None = None, max_makespan: int | None = None,
-             connectivity: str = "eager", minimize_travel: bool = True, prune: bool = True,
+             connectivity: str = "eager", minimize_travel: bool = True, prune: bool = True, prune_tiles: bool = True,
              single_carry: bool = False, solver: str = "cadical195", chunk: int = 8,
              incumbent: Schedule | None = None, bounds: Bounds | None = None,
              progress: Callable | None = None) -> Result:
@@ -97,7 +99,7 @@ def plan_sat(instance: Instance, *, time_limit: float | None = None, max_makespa
     """
     if solver not in SOLVERS:
         raise OptionError(f"sat: unknown solver {solver!r} (expected one of: {', '.join(SOLVERS)})")
-    return _Search("sat", instance, time_limit, max_makespan, connectivity, minimize_travel, prune,
+    return _Search("sat", instance, time_limit, max_makespan, connectivity, minimize_travel, (prune, prune_tiles),
                    single_carry, solver=solver, chunk=chunk, incumbent=incumbent, bounds=bounds,
                    progress=progress).run()
 
@@ -115,7 +117,9 @@ class _Search:
         self.method, self.instance, self.kw = method, instance, kw
         self.start = time.perf_counter()
         self.deadline = None if time_limit is None else self.start + time_limit
-        self.options = Options(prune_reach=prune, prune_cells=prune, prune_tiles=prune, connectivity=connectivity,
+        prune, prune_tiles = prune
+        self.options = Options(prune_reach=prune, prune_cells=prune, prune_tiles=prune and prune_tiles,
+                               connectivity=connectivity,
                                single_carry=single_carry)
         self.minimize_travel = minimize_travel
         self.incumbent: np.ndarray | None = None

@@ -149,6 +149,10 @@ def test_gen_coop_on_the_command_line(tmp_path, capsys, cli):
     capsys.readouterr()
     assert cli(["check", out, shown]) == 0
     assert "valid: makespan 24" in capsys.readouterr().out
+    alone = tmp_path / "split.yaml"  # without -o the instance goes beside the schedule
+    assert cli(["gen", "coop", "--schedule", alone]) == 0
+    assert f"bille check {tmp_path / 'split.instance.yaml'} {alone}" in capsys.readouterr().err
+    assert cli(["check", tmp_path / "split.instance.yaml", alone]) == 0
     (tmp_path / "l.graph").write_text("oo\n.o\n")
     capsys.readouterr()
     assert cli(["gen", "coop", str(tmp_path / "l.graph"), "--search", "--json"]) == 0

@@ -202,3 +202,27 @@ def test_bounds_and_cpsat_agree_with_breadth_first_search_on_random_instances(sc
     result = solve(inst, "cpsat", time_limit=60, minimize_travel=False)
     assert result.status == "optimal" and validate(inst, result.schedule).valid
     assert result.metrics.makespan == optimum
+
+
+def test_the_dimacs_dump_is_compact_and_names_variables_first(tmp_path):
+    from pysat.formula import CNF
+    from pysat.solvers import Solver
+
+    from bille.encodings.model import Options, build
+
+    inst = load_instance(bundled_path("corridor-2"))
+    model = build(inst, 13, Options())
+    path = tmp_path / "corridor-2.cnf"
+    model.dump(path)
+    lines = path.read_text().splitlines()
+    header = next(k for k, line in enumerate(lines) if line.startswith("p cnf"))
+    assert all(line.startswith("c ") for line in lines[:header]) and header >= model.num_vars
+    assert not any(line.startswith("c ") for line in lines[header + 1:])
+    assert path.stat().st_size < 20_000_000
+    cnf = CNF(from_file=str(path))
+    with Solver(name="cadical195", bootstrap_with=cnf.clauses) as solver:
+        assert solver.solve()  # corridor-2's optimum is 13: satisfiable at 13
+    smaller = tmp_path / "corridor-2-12.cnf"
+    build(inst, 12, Options()).dump(smaller)
+    with Solver(name="cadical195", bootstrap_with=CNF(from_file=str(smaller)).clauses) as solver:
+        assert not solver.solve()  # and not at 12 (eager connectivity: no cut is missing)

@@ -480,3 +480,18 @@ def test_point_robots_run_too(tmp_path, embedded):
     out = session.start(inst, ip, sched, sp, broker=embedded, robots="sim", secrets_path=None,
                         journal_path=str(tmp_path / "p.jsonl"), settings=FAST)
     assert out.status == "completed" and out.worlds_match and out.finished == sched.length
+
+
+def test_robot_sim_says_what_it_serves(tmp_path):
+    path = tmp_path / "secrets.yaml"
+    path.write_text("left: s3cret\n")
+    proc = subprocess.Popen([sys.executable, "-m", "bille.tools.cli", "robot-sim", "--id", "left", "--broker",
+                             "mqtt://127.0.0.1:1", "--secrets", str(path)], stdin=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE, text=True)
+    try:
+        first = proc.stderr.readline()
+    finally:
+        proc.kill()
+        proc.wait(10)
+        proc.stderr.close()
+    assert "robot 'left'" in first and "mqtt://127.0.0.1:1" in first

@@ -24,6 +24,11 @@ def schedule_arg(arg: str):
     return load_schedule(resolve(arg, ScheduleError))
 
 
+def robots(count: int) -> str:
+    """``"1 robot"``, ``"3 robots"``."""
+    return f"{count} robot" + ("" if count == 1 else "s")
+
+
 def print_json(obj) -> None:
     click.echo(json.dumps(obj))
 

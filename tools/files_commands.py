@@ -4,10 +4,11 @@ from __future__ import annotations
 import click
 
 from bille.instances import InstanceError, check_instance, load_instance
-from bille.instances.bundled import bundled_names, bundled_path
+from bille.instances.bundled import SCHEDULE_SUFFIX, bundled_names, bundled_path
 from bille.solvers import validate
 
-from .common import EXIT_NO, EXIT_OK, instance_arg, label_of, print_json, record_traces, schedule_arg, trace_of, writable
+from .common import (EXIT_NO, EXIT_OK, instance_arg, label_of, print_json, record_traces, robots, schedule_arg, trace_of,
+                     writable)
 from .render import describe, draw
 
 
@@ -53,7 +54,7 @@ def show(instance: str) -> int:
     moved = int((inst.start.tiles != inst.goal_grid.tiles).sum())
     kind = "reconfiguration" if inst.is_reconfiguration else "path planning"
     click.echo(f"{inst.name}: {inst.width}x{inst.height} grid, moveset {inst.moveset.name}, "
-               f"{inst.num_robots} robots, {kind}")
+               f"{robots(inst.num_robots)}, {kind}")
     click.echo(f"tiles: {start_tiles} at start, {goal_tiles} in the goal, {moved} cells differ; "
                f"tasks: {len(inst.tasks) if inst.tasks is not None else 'none'}")
     click.echo(f"instance: {validity}")
@@ -64,9 +65,11 @@ def show(instance: str) -> int:
 
 @click.command("list")
 def list_() -> int:
-    """List the bundled instances."""
+    """List the bundled instances, each with the name of its bundled schedule (a known valid one,
+    usable wherever a schedule file is: bille check corridor-2 corridor-2.schedule)."""
     for name in bundled_names():
         inst = load_instance(bundled_path(name))
         kind = "reconfiguration" if inst.is_reconfiguration else "path planning"
-        click.echo(f"{name:<16} {inst.width}x{inst.height}, {inst.num_robots} robots, moveset {inst.moveset.name}, {kind}")
+        click.echo(f"{name:<16} {inst.width}x{inst.height}, {robots(inst.num_robots)}, moveset {inst.moveset.name}, "
+                   f"{kind}; schedule {name}{SCHEDULE_SUFFIX}")
     return EXIT_OK

@@ -196,7 +196,8 @@ def gen_hampath(graph_file, vertices, scale, start, robots, moveset, search, sch
 @click.option("--search", is_flag=True, help="With a graph: also find each robot's earliest arrival at the gadget by "
                                              "exhaustive search (small graphs only).")
 @click.option("--schedule", "schedule_file", type=click.Path(dir_okay=False),
-              help="The gadget alone: also write the schedule that splits the large task here.")
+              help="The gadget alone: also write the schedule that splits the large task here (and the "
+                   "instance beside it as NAME.instance.yaml, unless -o names a file).")
 @common
 def gen_coop(graph_file, vertices, scale, start, end, gap, search, schedule_file, seed, output, as_json) -> int:
     """Theorem 2's cooperative gadget: alone (no GRAPH), or attached to Theorem 1's
@@ -207,9 +208,17 @@ def gen_coop(graph_file, vertices, scale, start, end, gap, search, schedule_file
         if start or end or search:
             raise click.UsageError("--start, --end and --search need a GRAPH or --vertices")
         if schedule_file:
+            from pathlib import Path
+
             from bille.instances.schedule import Schedule, save_schedule
 
+            if not output:  # the pair is checked together: the instance goes beside its schedule
+                path = Path(schedule_file)
+                output = str(path.with_name(path.name.split(".")[0] + ".instance.yaml"))
+            writable(output, schedule_file)
             save_schedule(Schedule(demonstration(gap), meta={"method": "demonstration (gen coop)"}), schedule_file)
+            click.echo(f"schedule written to {schedule_file}; check it with: bille check {output} {schedule_file}",
+                       err=True)
         return _output(gadget(gap), output, as_json)
     if schedule_file:
         raise click.UsageError("--schedule is for the gadget alone (no GRAPH)")

@@ -5,6 +5,10 @@
 2. Connectivity: eager against lazy (time, cuts), ratio lazy / eager.
 3. Pruning: model size at the optimal horizon with and without it, and the time to the optimum.
 4. CP-SAT presolve on against off.
+5. Before and after, on every bundled instance and both back ends: the encoding without the
+   reachability in time with the tiles (``prune_tiles=false``, the encoding before it) against
+   the current one: model size at the last horizon, each horizon's answer and time, and the time
+   to the proved optimum (makespan only).
 
 Every run gets the same time limit; unfinished runs show their status instead of a time.
 """
@@ -83,11 +87,30 @@ def presolve_table(time_limit: float, threads: int, echo) -> None:
         echo(f"   {name:<12} {_time(off):>8} {_time(on):>8} {ratio:>7}")
 
 
+def before_after_table(time_limit: float, threads: int, echo) -> None:
+    from bille.instances.bundled import bundled_names
+
+    echo(f"5. before (prune_tiles=false) and after, every bundled instance (limit {time_limit:g} s per run)")
+    echo(f"   {'map':<12} {'method':<6} {'run':<7} {'vars':>8} {'clauses':>9} {'time [s]':>9}  horizons (T answer s)")
+    for name in bundled_names():
+        for method, opts in (("cpsat", {"threads": threads}), ("sat", {})):
+            times = {}
+            for label, tiles in (("before", False), ("after", True)):
+                _, result, last = _run(name, method, time_limit, minimize_travel=False, prune_tiles=tiles, **opts)
+                times[label] = result
+                steps = " ".join(f"{h['T']}{h['answer'][0]}{h['time_s']:.1f}" for h in result.stats.get("horizons", []))
+                echo(f"   {name:<12} {method:<6} {label:<7} {last.get('variables', 0):>8} {last.get('clauses', 0):>9} "
+                     f"{_time(result):>9}  {steps}")
+            before, after = times["before"], times["after"]
+            if before.status == after.status == "optimal" and after.time_s > 0:
+                echo(f"   {'':<12} {method:<6} {'before/after':<7} {before.time_s / after.time_s:.2f}")
+
+
 def report(time_limit: float = 120.0, threads: int = 2, sections=("optimum", "connectivity", "pruning", "presolve"),
            echo=print) -> None:
     start = time.perf_counter()
     tables = {"optimum": optimum_table, "connectivity": connectivity_table, "pruning": pruning_table,
-              "presolve": presolve_table}
+              "presolve": presolve_table, "before-after": before_after_table}
     for key in sections:
         tables[key](time_limit, threads, echo)
         echo("")

@@ -179,6 +179,9 @@ def robot_sim(robot_id, broker, fleet, secret_env, secrets_path, fault_rate, del
                 time.sleep(0.5)
             os._exit(0)
         threading.Thread(target=watch, daemon=True).start()
+    else:  # started by hand: say what it serves (processes started by bille run stay quiet)
+        click.echo(f"bille robot-sim: robot '{robot_id}' of fleet '{fleet}' serving orders from {broker} "
+                   f"(Ctrl-C to stop)", err=True)
     serve(robot_id, url, secret, fleet=fleet,
           faults=Faults(set(fail_at), set(drop_at), set(die_at), fault_rate, delay, seed))
     return EXIT_OK
