@@ -18,6 +18,10 @@ from .options import check_options
 from .registry import CLASSIC, METHODS
 from .validate import Report, validate
 
+__all__ = ["Bounds", "CLASSIC", "METHODS", "Metrics", "OptionError", "Report", "Result", "STATUSES", "Schedule", "bind",
+           "dump_schedule", "load_schedule", "lower_bound", "metrics", "save_schedule", "schedule_from_text", "solve",
+           "validate"]
+
 
 def solve(instance: Instance, method: str, progress=None, **options) -> Result:
     """Solve ``instance`` with ``method`` (a key of :data:`METHODS`).

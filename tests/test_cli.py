@@ -134,3 +134,14 @@ def test_solve_exact_json(capsys, tmp_path):
     assert code == 0 and set(result) == {"method", "status", "metrics", "lower_bound", "time_s", "stats"}
     assert result["status"] == "optimal" and result["metrics"]["makespan"] == result["lower_bound"] == 4
     assert validate(load_instance(bundled_path("crowded-3")), load_schedule(tmp_path / "s.yaml")).valid
+
+
+def test_python_dash_m_bille_and_the_version():
+    import bille
+    import bille.solvers
+
+    assert bille.__version__ and bille.__version__[0].isdigit()
+    done = subprocess.run([sys.executable, "-m", "bille", "--version"], capture_output=True, text=True)
+    assert done.returncode == 0 and done.stdout.strip() == f"bille {bille.__version__}"
+    public = set(bille.solvers.__all__)
+    assert {"solve", "validate", "METHODS"} <= public and not public & {"time", "inspect", "annotations"}

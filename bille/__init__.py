@@ -1,0 +1,13 @@
+"""bille: multi-robot reconfiguration of 2D tile structures by Bill-E inchworm robots.
+
+The layers are subpackages: :mod:`bille.instances` (the problem, the rules, files),
+:mod:`bille.heuristics` (the planners), :mod:`bille.encodings` (the time-expanded model),
+:mod:`bille.solvers` (``solve()``, the validator, bounds, exact and anytime solving) and
+:mod:`bille.tools` (the command line). ``python -m bille`` is the ``bille`` command.
+"""
+from importlib.metadata import PackageNotFoundError, version
+
+try:
+    __version__ = version("bille")
+except PackageNotFoundError:  # run from a source tree that is not installed
+    __version__ = "0+unknown"
