@@ -65,8 +65,9 @@ def plan(instance: Instance, *, time_limit: float = 60.0, window: int = 8, slice
     ----------
     time_limit : seconds for the whole run (default 60).
     window : the first window length of the neighbourhood search, in steps (default 8).
-    slice : seconds one window may take; without ``parallel``, the seconds each search runs before
-        the other takes its turn (default 2).
+    slice : seconds the first window may take (each undecided window gives the next half as much
+        again); without ``parallel``, also the seconds each search runs before the other takes its
+        turn (default 2).
     parallel : raise the bound in a child process, on a second core, while the parent searches
         windows (default; where the platform cannot fork, the two take turns).
     solver : the python-sat solver of both searches (default ``cadical195``).
@@ -304,6 +305,7 @@ class _Windows:
         self.done: set = set()  # (schedule key, a, b) proved not to shorten
         self.cursor = 0
         self.exhausted = False  # every window of the best schedule, itself included, proved
+        self.budget = run.slice  # seconds per window: grows by half after an undecided one
 
     def windows(self, makespan: int) -> list[tuple[int, int]]:
         w = min(self.length, makespan)
@@ -326,9 +328,11 @@ class _Windows:
                 continue
             a, b = todo[self.cursor % len(todo)]
             self.cursor += 1
-            status = self.shorten(best, a, b, min(run.end, time.perf_counter() + run.slice))
+            status = self.shorten(best, a, b, min(run.end, time.perf_counter() + self.budget))
             if status == UNSAT:
                 self.done.add((key, a, b))
+            elif status == UNKNOWN:
+                self.budget *= 1.5
 
     def shorten(self, best: Incumbent, a: int, b: int, until: float) -> str:
         run, inst = self.run, self.run.instance

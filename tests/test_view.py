@@ -245,3 +245,15 @@ def test_solve_and_gap_record_their_schedules(tmp_path, capsys):
     assert code == 0
     data = read(path)
     assert {"/compare-2/temporal-astar/robots/0/feet", "/compare-2/cpsat/robots/0/feet"} <= set(data)
+
+
+def test_two_places_at_once_are_each_robots_own(tmp_path):
+    from helpers import make
+
+    inst = make("TTTT\n....", [{"at": [0, 0], "carrying": True}, {"at": [3, 0], "carrying": True}],
+                goal="TTTT\nT..T", moveset="point")
+    sched = Schedule((("place-south",), ("place-south",)))
+    path = tmp_path / "two.rrd"
+    record([trace(inst, sched, "two")], path)
+    events = [text for step, texts in read(path)["/two/events"]["TextLog:text"] for text in texts]
+    assert events == ["step 1: A places (place-south) at (0, 1)", "step 1: B places (place-south) at (3, 1)"]

@@ -237,12 +237,15 @@ def _log_events(rec, tr: Trace) -> None:
             kind = movesets[i].actions[movesets[i].index[name]].kind
             if kind in (Kind.PICK, Kind.PLACE):
                 before, after = tr.tiles[t - 1], tr.tiles[t]
-                changed = np.flatnonzero(before != after)
-                where = ", ".join(f"({c % inst.width}, {c // inst.width})" for c in changed)
+                # its own cell: the changed cell in its collision set (the sets of one step are
+                # disjoint, so two robots placing at once each get their own)
+                mine = {(int(x), int(y)) for x, y in tr.swept[t][i]}
+                changed = [(c % inst.width, c // inst.width) for c in np.flatnonzero(before != after).tolist()]
+                where = ", ".join(f"({x}, {y})" for x, y in changed if (x, y) in mine)
                 verb = "picks" if kind == Kind.PICK else "places"
                 rec.set_time(TIMELINE, sequence=t)
-                rec.log(f"{tr.label}/events", rr.TextLog(f"step {t}: {style.robot_name(i)} {verb} ({name}); "
-                                                         f"tiles changed at {where}", level="INFO"))
+                rec.log(f"{tr.label}/events", rr.TextLog(f"step {t}: {style.robot_name(i)} {verb} ({name}) "
+                                                         f"at {where}", level="INFO"))
 
 
 def _log_violation(rec, tr: Trace) -> None:

@@ -46,6 +46,25 @@ def bench_execute(sizes: str, steps: int, broker: str | None) -> int:
     return EXIT_OK
 
 
+@bench.command("anytime")
+@click.option("--time-limit", type=click.FloatRange(min=1), default=60.0, show_default=True,
+              help="Seconds per run (three runs per map).")
+@click.option("--maps", default=",".join(f"lt-{k}" for k in range(1, 9)), show_default=True,
+              help="Comma-separated bundled maps.")
+def bench_anytime(time_limit: float, maps: str) -> int:
+    """How far anytime certified solving improves the paper's method: makespans, the lower bound
+    proved, certified gaps."""
+    from .anytime import rows, table
+
+    names = _names(maps)
+    for name in names:
+        bundled_path(name)  # unknown names fail here, before any work
+    found = rows(names, time_limit, progress=lambda name: click.echo(f"  {name} ...", err=True))
+    for line in table(found):
+        click.echo(line)
+    return EXIT_OK
+
+
 @bench.command("planners")
 @click.option("--time-limit", type=click.FloatRange(min=0.1), default=60.0, show_default=True, help="Seconds per run.")
 @click.option("--jobs", "-j", type=click.IntRange(min=1), default=None, help="Parallel processes (default: CPUs).")
