@@ -14,6 +14,7 @@ from bille.instances import BilleError
 
 from .bench.commands import bench
 from .common import EXIT_OK, EXIT_USAGE
+from .convert import convert
 from .execute.commands import robot_sim, run
 from .files_commands import check, list_, show
 from .gen import gen
@@ -29,7 +30,7 @@ def cli() -> None:
     INSTANCE and SCHEDULE are YAML files, or the names of bundled ones (see 'bille list').
     """
 
-for command in (check, show, list_, solve_, plan_sequence, gap, view, gen, run, robot_sim, bench):
+for command in (check, show, list_, solve_, plan_sequence, gap, view, gen, convert, run, robot_sim, bench):
     cli.add_command(command)
 
 

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import click
+import numpy as np
 
 from bille.instances import InstanceError, check_instance, load_instance
 from bille.instances.bundled import SCHEDULE_SUFFIX, bundled_names, bundled_path
@@ -18,14 +19,21 @@ from .render import describe, draw
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of text.")
 @click.option("--rerun", "rrd", type=click.Path(dir_okay=False), metavar="OUT.rrd",
               help="Also write a rerun recording; a violation is marked at its step.")
-def check(instance: str, schedule: str, as_json: bool, rrd: str | None) -> int:
+@click.option("--poses", "poses_path", type=click.Path(dir_okay=False), metavar="OUT.csv|OUT.json",
+              help="Also write every robot's feet, heading, load, action and the cells it picks or places, "
+                   "per step (up to a violation).")
+def check(instance: str, schedule: str, as_json: bool, rrd: str | None, poses_path: str | None) -> int:
     """Check SCHEDULE against the rules for INSTANCE (exit 0 valid, 1 invalid, 2 bad input)."""
-    writable(rrd)
+    if poses_path and not poses_path.endswith((".csv", ".json")):
+        raise click.BadParameter(f"{poses_path}: expected a .csv or .json file name", param_hint="--poses")
+    writable(rrd, poses_path)
     inst = instance_arg(instance)
     sched = schedule_arg(schedule)
     report = validate(inst, sched)
     if rrd:
         record_traces([trace_of(inst, sched, label_of(schedule))], rrd, quiet=as_json)
+    if poses_path:
+        write_poses(trace_of(inst, sched, label_of(schedule)), poses_path)
     if as_json:
         print_json(report.to_json())
     elif report.valid:
@@ -61,6 +69,56 @@ def show(instance: str) -> int:
     for line in draw(inst) + ["robots:"] + describe(inst):
         click.echo(line)
     return code
+
+
+POSE_FIELDS = ["step", "robot", "front_x", "front_y", "back_x", "back_y", "heading", "carrying", "action", "picked",
+               "placed"]
+
+
+def pose_rows(tr) -> list[dict]:
+    """Per frame and robot: feet, heading (N, E, S, W; none for a point robot), load, the action
+    that led there, and the cell it picked or placed in that step."""
+    from bille.instances.grid import HEADING_NAMES, HEADING_VECTORS
+
+    heading_of = dict(zip(HEADING_VECTORS, HEADING_NAMES))
+    inst, rows = tr.instance, []
+    for t in range(tr.steps + 1):
+        for i in range(inst.num_robots):
+            (fx, fy), (bx, by) = tr.front[t, i].tolist(), tr.back[t, i].tolist()
+            action = tr.actions[t][i] if t else None
+            picked = placed = None
+            if t and tr.carrying[t, i] != tr.carrying[t - 1, i]:
+                mine = {(int(x), int(y)) for x, y in tr.swept[t][i]}
+                cell = next(([c % inst.width, c // inst.width] for c in
+                             np.flatnonzero(tr.tiles[t] != tr.tiles[t - 1]).tolist()
+                             if (c % inst.width, c // inst.width) in mine), None)
+                picked, placed = (cell, None) if tr.carrying[t, i] else (None, cell)
+            rows.append(dict(step=t, robot=i, front_x=fx, front_y=fy, back_x=bx, back_y=by,
+                             heading=heading_of.get((fx - bx, fy - by)), carrying=bool(tr.carrying[t, i]),
+                             action=action, picked=picked, placed=placed))
+    return rows
+
+
+def write_poses(tr, path: str) -> None:
+    import csv
+    import io
+    import json
+
+    from bille.instances import BilleError
+    from bille.instances.files import write_atomic
+
+    rows = pose_rows(tr)
+    if path.endswith(".json"):
+        text = json.dumps({"instance": tr.instance.name, "fields": POSE_FIELDS, "rows": rows}, indent=None)
+    else:
+        buf = io.StringIO()
+        writer = csv.DictWriter(buf, fieldnames=POSE_FIELDS)
+        writer.writeheader()
+        for r in rows:
+            writer.writerow({k: ("" if v is None else " ".join(map(str, v)) if isinstance(v, list) else v)
+                             for k, v in r.items()})
+        text = buf.getvalue()
+    write_atomic(path, text, BilleError)
 
 
 @click.command("list")

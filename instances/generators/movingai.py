@@ -79,11 +79,14 @@ def read_scen(path: str | Path) -> list[tuple[tuple[int, int], tuple[int, int]]]
     return out
 
 
-def from_movingai(map_path: str | Path, scen_path: str | Path | None = None, *, agents: int,
+def from_movingai(map_path: str | Path, scen_path: str | Path | None = None, *, agents: int | None,
                   seed: int = 0, name: str | None = None, collisions: str = "classic") -> Instance:
     """An instance of ``agents`` point robots on the map (see the module docstring), under
-    ``collisions``: ``classic`` (the benchmark's own rules, the default) or ``bille``."""
-    if agents < 1:
+    ``collisions``: ``classic`` (the benchmark's own rules, the default) or ``bille``. ``agents``
+    None takes every usable row of the scenario."""
+    if agents is None and scen_path is None:
+        raise InstanceError("without a scenario the number of agents must be given")
+    if agents is not None and agents < 1:
         raise InstanceError(f"--agents must be at least 1, got {agents}")
     width, height, passable = read_map(map_path)
     if not passable.any():
@@ -96,11 +99,15 @@ def from_movingai(map_path: str | Path, scen_path: str | Path | None = None, *, 
         starts: set = set()
         goals: set = set()
         for s, g in read_scen(scen_path):  # as the benchmark means it: starts apart, goals apart
-            if inside(s) and inside(g) and s not in starts and g not in goals and len(pairs) < agents:
+            if inside(s) and inside(g) and s not in starts and g not in goals and (agents is None or len(pairs) < agents):
                 pairs.append((s, g))
                 starts.add(s)
                 goals.add(g)
         source = str(scen_path)
+        if agents is None:
+            agents = len(pairs)
+            if not agents:
+                raise InstanceError(f"{scen_path}: no usable row (start and goal in the map's largest connected part)")
     else:
         rnd = random.Random(seed)
         cells = [(c % width, c // width) for c in np.flatnonzero(tiles).tolist()]
