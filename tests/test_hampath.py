@@ -141,3 +141,21 @@ def test_bad_hampath_input_is_one_line_and_exit_2(tmp_path, rejects, argv, messa
     (tmp_path / "bad.graph").write_text("oxo\n")
     (tmp_path / "l.graph").write_text("oo\n.o\n")
     rejects([a.replace("{tmp}", str(tmp_path)) for a in argv], message, tmp_path / "out.yaml")
+
+
+def test_an_edge_list_and_a_networkx_graph_are_grid_graphs_or_refused():
+    import networkx as nx
+
+    from bille.instances import InstanceError
+    from bille.instances.generators.graphs import parse_graph
+
+    g = parse_graph("# an L\n0 0 1 0\n1 0 1 1\n")
+    assert sorted(g.nodes) == [(0, 0), (1, 0), (1, 1)] and g.number_of_edges() == 2
+    with pytest.raises(InstanceError, match=r"<graph>:2: the edge \(0, 0\)-\(2, 0\) joins points at distance 2"):
+        parse_graph("0 0 1 0\n0 0 2 0\n")
+    with pytest.raises(InstanceError, match=r"\(0, 0\) and \(0, 1\) are at distance 1 but not joined"):
+        parse_graph("0 0 1 0\n1 0 1 1\n1 1 0 1\n")  # a square missing one side: not induced
+    with pytest.raises(InstanceError, match="vertex 0 is not an"):
+        reduction(nx.path_graph(3), 1)
+    inst = reduction(nx.grid_2d_graph(2, 2), 1)
+    assert inst.meta["edges"] == 4 and inst.meta["graph"] == "oo\noo\n"

@@ -5,7 +5,13 @@ distance 1 (an induced subgraph of the infinite grid). Files describe one in eit
 
 - a drawing: ``o`` a vertex, ``.`` or a space no vertex, one text row per grid row (``y`` grows
   downward);
-- a vertex list: one ``x y`` pair per line.
+- a vertex list: one ``x y`` pair per line;
+- an edge list: one ``x1 y1 x2 y2`` per line, two points at distance 1 (the vertices are their
+  ends); since a grid graph joins *every* two points at distance 1, an edge list that leaves
+  such a pair out is refused, naming the pair.
+
+In the Python API any networkx graph whose vertices are ``(x, y)`` integer points is accepted if it
+is a grid graph (:func:`check_grid_graph` names what is not).
 
 Lines starting with ``#`` are comments in both. Hamiltonian paths (Itai, Papadimitriou and
 Szwarcfiter 1982: NP-complete in grid graphs) are decided exactly by backtracking, which is fast
@@ -23,6 +29,7 @@ from ..errors import InstanceError
 
 XY = tuple[int, int]
 _PAIR = re.compile(r"^\s*(-?\d+)\s+(-?\d+)\s*$")
+_EDGE = re.compile(r"^\s*(-?\d+)\s+(-?\d+)\s+(-?\d+)\s+(-?\d+)\s*$")
 
 
 def grid_graph(vertices) -> nx.Graph:
@@ -51,6 +58,16 @@ def parse_graph(text: str, name: str = "<graph>") -> nx.Graph:
         raise InstanceError(f"{name}: no vertices (expected a drawing with 'o' or lines 'x y')")
     if all(_PAIR.match(line) for _, line in body):
         return grid_graph(tuple(map(int, _PAIR.match(line).groups())) for _, line in body)
+    if all(_EDGE.match(line) for _, line in body):
+        g = nx.Graph()
+        for k, line in body:
+            x1, y1, x2, y2 = map(int, _EDGE.match(line).groups())
+            if abs(x1 - x2) + abs(y1 - y2) != 1:
+                raise InstanceError(f"{name}:{k}: the edge ({x1}, {y1})-({x2}, {y2}) joins points at distance "
+                                    f"{abs(x1 - x2) + abs(y1 - y2)}, not 1")
+            g.add_edge((x1, y1), (x2, y2))
+        check_grid_graph(g, name)
+        return grid_graph(g.nodes)
     points = []
     top = body[0][0]
     for k, line in lines[top - 1:]:
@@ -66,6 +83,26 @@ def parse_graph(text: str, name: str = "<graph>") -> nx.Graph:
     if not points:
         raise InstanceError(f"{name}: no vertices (expected a drawing with 'o' or lines 'x y')")
     return grid_graph(points)
+
+
+def check_grid_graph(g, name: str = "the graph") -> None:
+    """Raise :class:`InstanceError` unless ``g`` is a grid graph: a networkx graph whose vertices
+    are ``(x, y)`` integer points and whose edges join exactly the pairs at distance 1."""
+    if not isinstance(g, nx.Graph):
+        raise InstanceError(f"{name}: expected a networkx graph, got {type(g).__name__}")
+    for v in g.nodes:
+        if not (isinstance(v, tuple) and len(v) == 2 and all(isinstance(c, int) and not isinstance(c, bool) for c in v)):
+            raise InstanceError(f"{name}: vertex {v!r} is not an (x, y) integer point (a grid graph's vertices are "
+                                f"points of the grid, e.g. networkx.grid_2d_graph(3, 2))")
+    for a, b in g.edges:
+        if abs(a[0] - b[0]) + abs(a[1] - b[1]) != 1:
+            raise InstanceError(f"{name}: the edge {a}-{b} joins points at distance {abs(a[0] - b[0]) + abs(a[1] - b[1])}, "
+                                f"not 1")
+    for x, y in g.nodes:
+        for n in ((x + 1, y), (x, y + 1)):
+            if n in g and not g.has_edge((x, y), n):
+                raise InstanceError(f"{name}: the points {(x, y)} and {n} are at distance 1 but not joined; a grid "
+                                    f"graph joins every such pair (the reductions build all of them)")
 
 
 def load_graph(path: str | Path) -> nx.Graph:

@@ -50,7 +50,7 @@ from ..moveset import Kind, load_moveset
 from ..rules import State, apply
 from ..schedule import Schedule
 from ..walking import Walk
-from .graphs import draw_graph, hamiltonian_path
+from .graphs import check_grid_graph, draw_graph, hamiltonian_path
 
 XY = tuple[int, int]
 HALF = 3                     # a gadget spans -3..3 around its vertex tile
@@ -70,7 +70,9 @@ def bound(vertices: int, scale: int) -> int:
 
 
 def check_graph(g: nx.Graph, scale: int) -> None:
-    """Raise :class:`InstanceError` for an empty or disconnected graph or a scale below 1."""
+    """Raise :class:`InstanceError` for a graph that is not a grid graph, an empty or
+    disconnected one, or a scale below 1."""
+    check_grid_graph(g)
     if g.number_of_nodes() == 0:
         raise InstanceError("the graph has no vertices")
     if not nx.is_connected(g):
