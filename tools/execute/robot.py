@@ -134,10 +134,12 @@ class SimRobot:
         parsed = parse_topic(name)
         if parsed != (self.fleet, self.id, "order") and parsed != (self.fleet, self.id, "instantActions"):
             return  # not addressed to this robot (a broker may deliver retained messages of other topics)
+        if not payload:
+            return  # a cleared retained message
         msg = self.gate.admit(self.id, parsed[2], payload)
         if not isinstance(msg, dict):
             self.counters["duplicates" if msg.duplicate else "rejected"] += 1
-            log.warning("%s", msg)
+            log.log(logging.DEBUG if msg.duplicate else logging.WARNING, "%s", msg)  # repeats are expected
             return
         if not tied_to(msg, self.nonce):  # signed, but for a robot process that is gone
             self.counters["rejected"] += 1

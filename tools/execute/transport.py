@@ -32,7 +32,8 @@ class Transport:
     def connect(self) -> None:
         subs = [(topic(self.s.fleet, r, kind), 1) for r in self.s.robots for kind in ("state", "connection")]
         self.client = connect(self.s.url, f"bille-executor-{self.s.fleet}-{self.run_id}",
-                              on_message=lambda c, u, m: self.inbox.put((m.topic, m.payload, time.perf_counter())),
+                              on_message=lambda c, u, m: self.inbox.put((m.topic, m.payload, time.perf_counter(),
+                                                                         bool(m.retain))),
                               on_connected=lambda c: c.subscribe(subs))
 
     def close(self) -> None:
@@ -59,13 +60,15 @@ class Transport:
             except queue.Empty:
                 return
 
-    def take(self, name: str, payload: bytes, at: float) -> None:
+    def take(self, name: str, payload: bytes, at: float, retained: bool = False) -> None:
         parsed = parse_topic(name)
-        if parsed is None or parsed[0] != self.s.fleet or parsed[1] not in self.sealers:
-            return
+        if parsed is None or parsed[0] != self.s.fleet or parsed[1] not in self.sealers or not payload:
+            return  # not ours, or a cleared retained message
         msg = self.gate.admit(parsed[1], parsed[2], payload)
         if not isinstance(msg, dict):
-            log.warning("%s", msg)
+            # expected: repeats (QoS 1 delivers at least once) and what a broker kept from earlier
+            # runs (retained, signed with other secrets); anything else is worth a warning
+            log.log(logging.DEBUG if msg.duplicate or retained else logging.WARNING, "%s", msg)
         elif parsed[2] == "state":
             self.reports[parsed[1]] = msg
             self.arrivals[parsed[1]] = at
