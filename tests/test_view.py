@@ -1,6 +1,7 @@
 """Recordings and pictures: read back with rerun's reader and checked against the rules."""
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -13,7 +14,7 @@ from bille.instances.rules import State, apply
 from bille.solvers import Schedule, bind, load_schedule
 from bille.tools import style
 from bille.tools.cli import main
-from bille.tools.pictures import choose_frames, save_gif, save_png
+from bille.tools.pictures import GAP_PX, MAX_ROW_PX, choose_frames, save_gif, save_png
 from bille.tools.recording import read, record
 from bille.tools.trace import trace
 
@@ -160,6 +161,7 @@ def test_png_size_and_colors_at_cells(tmp_path):
         assert _close(_pixel(img, layout.cell_center(0, col, *back)), style.robot_color(0))
         occupied = {back, tuple(int(v) for v in tr.front[t, 0]), tuple(int(v) for v in tr.front[t, 1])}
         occupied |= set(tr.swept[t][0]) | set(tr.swept[t][1])
+        occupied |= {tuple(int(v) for v in tr.front[k, i]) for k in range(t + 1) for i in range(2)}  # path trails
         free_tiles = [(x, 1) for x in range(6) if (x, 1) not in occupied]
         assert free_tiles
         for cell in free_tiles:
@@ -174,7 +176,10 @@ def test_png_rows_are_schedules_and_gif_has_every_frame(tmp_path):
     sched = load_schedule(bundled_path("reconfig-30.schedule"))
     traces = [trace(inst, sched, "a"), trace(inst, None, "b")]
     layout = save_png(traces, tmp_path / "two.png", frames="all", cell=8)
-    assert (layout.rows, layout.cols) == (2, sched.length + 1)
+    fit = (MAX_ROW_PX - GAP_PX) // (inst.width * 8 + GAP_PX)  # frames wrap into rows of this many
+    cols = min(fit, sched.length + 1)
+    assert layout.cols == cols and layout.rows == math.ceil((sched.length + 1) / cols) + 1  # b: its start only
+    assert layout.size_px[0] <= MAX_ROW_PX
     gif = tmp_path / "r.gif"
     layout = save_gif(traces, gif, fps=10, cell=8)
     with Image.open(gif) as im:
@@ -257,3 +262,49 @@ def test_two_places_at_once_are_each_robots_own(tmp_path):
     record([trace(inst, sched, "two")], path)
     events = [text for step, texts in read(path)["/two/events"]["TextLog:text"] for text in texts]
     assert events == ["step 1: A places (place-south) at (0, 1)", "step 1: B places (place-south) at (3, 1)"]
+
+
+def test_the_legend_lists_only_what_the_picture_shows():
+    from bille.tools.pictures import Painter
+
+    def labels(traces):
+        painter = Painter(traces, 1, 1, 8)
+        try:
+            return [h.get_label() for h in painter.legend]
+        finally:
+            painter.close()
+
+    line = load_instance(DATA / "line.yaml")
+    with_obstacle = labels([trace(line, load_schedule(DATA / "line.ok.yaml"), "line")])
+    assert "obstacle" in with_obstacle and "cells swept (its robot's colour)" in with_obstacle
+    r30 = load_instance(bundled_path("reconfig-30"))
+    alone = labels([trace(r30, None, "start")])
+    assert "obstacle" not in alone and "cells swept (its robot's colour)" not in alone and "path so far" not in alone
+    assert "goal: add a tile" in alone and "robot A" in alone
+
+
+def test_picks_places_and_the_hand_over_are_marked():
+    from bille.instances.generators.coop import demonstration, gadget
+    from bille.tools.pictures import Painter, _manipulations
+
+    inst = gadget(2)
+    tr = trace(inst, Schedule(demonstration(2)), "split")
+    kinds = [kind for _, _, kind, _ in _manipulations(tr)]
+    assert kinds.count("place") == 8 and kinds.count("hand-over") == 1 and kinds.count("pick") == 7
+    painter = Painter([tr], 1, 1, 8)
+    try:
+        assert "hand-over: picked where another placed" in [h.get_label() for h in painter.legend]
+    finally:
+        painter.close()
+
+
+def test_frames_are_chosen_per_schedule_and_labels_kept(tmp_path):
+    from bille.tools.pictures import _frames_of
+
+    assert _frames_of("auto", 8) == [0, 2, 4, 6, 8] and _frames_of("0,20,30", 8) == [0, 8]
+    out = tmp_path / "two.png"
+    code = _run(["view", "corridor-2", "corridor-2.schedule", "corridor-2.schedule", "--label", "no transfer",
+                 "--label", "with transfer", "--png", str(out), "--rerun", str(tmp_path / "two.rrd")])
+    assert code == 0 and out.exists()
+    assert "/no_transfer/events" in read(tmp_path / "two.rrd")  # entity paths are made valid, labels are not
+    assert trace(load_instance(bundled_path("corridor-2")), None, "no transfer").label == "no transfer"

@@ -104,11 +104,11 @@ def unique(names: list[str]) -> list[str]:
 
 
 def trace_of(inst, schedule, label: str):
-    """A schedule's trace for recordings and pictures."""
-    from .recording import entity_label
+    """A schedule's trace for recordings and pictures, labelled as given (a recording makes the
+    label an entity path itself)."""
     from .trace import trace
 
-    return trace(inst, schedule, entity_label(label))
+    return trace(inst, schedule, label)
 
 
 def record_traces(traces, path, *, spawn: bool = False, quiet: bool = False) -> None:

@@ -5,8 +5,15 @@ panels, each one frame of one schedule; every panel has ``cell`` pixels per grid
 band above it and a gap around it, and the legend runs along the bottom, so that the pixel of
 every cell is known (:meth:`Layout.cell_center`): tests read colors there.
 
-- PNG: one row per schedule, one column per chosen frame (a strip; one frame is a strip of one).
+- PNG: each schedule its frames (chosen per schedule: ``auto`` gives a shorter schedule its own
+  start, end and steps between), in rows of at most :data:`MAX_ROW_PX` pixels, one schedule
+  after the other.
 - GIF: one row with one panel per schedule, side by side, all frames in time.
+
+Every panel has its coordinates along its left and bottom edges, each robot's path so far, and
+marks where a robot picked (``-``) or placed (``+``) a tile in the step just taken, ``h`` where it
+picked a tile another robot had placed (a hand-over). The legend lists only what the picture
+shows.
 """
 from __future__ import annotations
 
@@ -31,7 +38,8 @@ from . import style  # noqa: E402
 from .trace import Trace  # noqa: E402
 
 DPI = 100
-TITLE_PX, GAP_PX, LEGEND_ROW_PX, LEGEND_ITEM_PX = 22, 10, 22, 130
+TITLE_PX, GAP_PX, LEGEND_ROW_PX, LEGEND_ITEM_PX = 22, 16, 22, 170
+MAX_ROW_PX = 1600  # a row of panels wraps beyond this width
 
 
 def _rgb(color, alpha: float | None = None):
@@ -119,15 +127,43 @@ class Painter:
         ax.set_axis_off()
         return ax
 
+    def _coordinates(self, ax) -> None:
+        """Cell coordinates along the left and bottom edges (every k-th where cells are small)."""
+        inst, cell = self.traces[0].instance, self.layout.cell
+        ax.set_axis_on()
+        for spine in ax.spines.values():
+            spine.set_visible(False)
+        kx = max(1, math.ceil((4 * len(str(inst.width - 1)) + 4) / cell))
+        ky = max(1, math.ceil(10 / cell))
+        ax.set_xticks([x + 0.5 for x in range(0, inst.width, kx)], [str(x) for x in range(0, inst.width, kx)])
+        ax.set_yticks([y + 0.5 for y in range(0, inst.height, ky)], [str(y) for y in range(0, inst.height, ky)])
+        ax.tick_params(length=0, labelsize=6, pad=1, colors=(0.45, 0.45, 0.45))
+
     @staticmethod
     def _legend_items(traces: Sequence[Trace]) -> list:
-        items = [Patch(facecolor=_rgb(style.TILE), label="tile"), Patch(facecolor=_rgb(style.OBSTACLE), label="obstacle")]
+        """One entry per kind of thing the picture shows, and none for what it does not."""
+        grey = (0.45, 0.45, 0.45)
+        items = [Patch(facecolor=_rgb(style.TILE), label="tile")]
         inst = traces[0].instance
+        if inst.start.obstacles.any():
+            items.append(Patch(facecolor=_rgb(style.OBSTACLE), label="obstacle"))
         if (inst.goal_tiles & ~inst.start.tiles).any():
             items.append(Patch(facecolor="none", edgecolor=_rgb(style.GOAL_FILL), linewidth=2, label="goal: add a tile"))
         if (inst.start.tiles & ~inst.goal_tiles).any():
             items.append(Patch(facecolor="none", edgecolor=_rgb(style.GOAL_CLEAR), linewidth=2, label="goal: remove"))
-        items.append(Patch(facecolor=_rgb(style.ROBOTS[0], 0.3), label="cells swept"))
+        if inst.robot_goals and any(g is not None for g in inst.robot_goals):
+            items.append(Line2D([], [], linestyle="", marker="o", markersize=9, markerfacecolor="none",
+                                markeredgecolor=grey, label="goal cell (its robot's colour)"))
+        if any(cells for tr in traces for step in tr.swept for cells in step):
+            items.append(Patch(facecolor=(*grey, 0.3), label="cells swept (its robot's colour)"))
+        if any(tr.steps for tr in traces):
+            items.append(Line2D([], [], color=grey, alpha=0.6, linewidth=1.5, label="path so far"))
+        kinds = {kind for tr in traces for _, _, kind, _ in _manipulations(tr)}
+        for kind, text in (("place", "placed this step"), ("pick", "picked this step"),
+                           ("hand-over", "hand-over: picked where another placed")):
+            if kind in kinds:
+                items.append(Line2D([], [], linestyle="", marker=f"${_MARK[kind]}$", markersize=8, color=grey,
+                                    label=text))
         for i in range(inst.num_robots):
             items.append(Line2D([], [], color=_rgb(style.robot_color(i)), marker="o", linewidth=3,
                                 label=f"robot {style.robot_name(i)}"))
@@ -142,6 +178,7 @@ class Painter:
             ax.clear()
             ax.set_axis_off()
             _draw_frame(ax, tr, t)
+            self._coordinates(ax)
 
     def image(self) -> np.ndarray:
         """The figure as ``uint8[H, W, 3]``."""
@@ -174,7 +211,15 @@ def _draw_frame(ax, tr: Trace, t: int) -> None:
             ax.add_patch(Circle((goal[0] + 0.5, goal[1] + 0.5), style.GOAL_RADIUS, fill=False, edgecolor=color,
                                 linewidth=lw, zorder=3))
     for i in range(inst.num_robots):
+        if t:
+            trail = tr.front[: t + 1, i] + 0.5
+            ax.plot(trail[:, 0], trail[:, 1], color=_rgb(style.robot_color(i)), alpha=0.45, linewidth=lw, zorder=4)
+    for i in range(inst.num_robots):
         _draw_robot(ax, tr, t, i, lw)
+    for step, i, kind, (x, y) in _manipulations(tr):
+        if step == t:
+            ax.text(x + 0.5, y + 0.5, _MARK[kind], color=_rgb(style.robot_color(i)), fontsize=max(6, 0.5 * _cell_pt(ax, w)),
+                    fontweight="bold", ha="center", va="center", zorder=7)
     v = tr.violation
     if v is not None and t == min(v.step, tr.steps):
         for x, y in v.cells:
@@ -189,6 +234,34 @@ def _draw_frame(ax, tr: Trace, t: int) -> None:
         when += f", {v.rule}!"
     text, size = _fit(f"{tr.label}: ", when, w * _cell_pt(ax, w))
     ax.text(0, -0.15, text, fontsize=size, va="bottom", ha="left", clip_on=False, transform=ax.transData)
+
+
+_MARK = {"place": "+", "pick": "-", "hand-over": "h"}
+
+
+def _manipulations(tr: Trace) -> list[tuple[int, int, str, tuple[int, int]]]:
+    """``(step, robot, kind, cell)`` of every pick and place: a pick of a cell whose last place
+    was another robot's is a ``hand-over``. The cell is the changed one in the robot's collision
+    set (the sets of one step are disjoint)."""
+    w, out, placed_by = tr.instance.width, [], {}
+    for t in range(1, tr.steps + 1):
+        changed = np.flatnonzero(tr.tiles[t] != tr.tiles[t - 1]).tolist()
+        if not changed:
+            continue
+        for i in range(tr.instance.num_robots):
+            if tr.carrying[t, i] == tr.carrying[t - 1, i]:
+                continue
+            mine = {(int(x), int(y)) for x, y in tr.swept[t][i]}
+            cell = next(((c % w, c // w) for c in changed if (c % w, c // w) in mine), None)
+            if cell is None:
+                continue
+            if tr.carrying[t, i]:
+                other = placed_by.get(cell, i) != i
+                out.append((t, i, "hand-over" if other else "pick", cell))
+            else:
+                placed_by[cell] = i
+                out.append((t, i, "place", cell))
+    return out
 
 
 def _draw_robot(ax, tr: Trace, t: int, i: int, lw: float) -> None:
@@ -226,16 +299,42 @@ def _cell_pt(ax, width: int) -> float:
 # ---- files ------------------------------------------------------------------------------------
 
 def save_png(traces: Sequence[Trace], path: str | Path, frames: str | None = None, cell: int = 32) -> Layout:
-    """A strip: one row per schedule, the chosen frames as columns. Written atomically."""
-    steps = max(t.steps for t in traces)
-    chosen = choose_frames(frames, steps)
-    painter = Painter(traces, len(traces), len(chosen), cell)
+    """Each schedule's chosen frames (:func:`choose_frames` on its own length; frame numbers
+    beyond a shorter schedule's end show its end, once), wrapped into rows of at most
+    :data:`MAX_ROW_PX` pixels, one schedule after the other. Written atomically."""
+    inst = traces[0].instance
+    per_trace = [_frames_of(frames, tr.steps) for tr in traces]
+    fit = max(1, (MAX_ROW_PX - GAP_PX) // (inst.width * cell + GAP_PX))
+    cols = min(fit, max(len(f) for f in per_trace))
+    panels, row = [], 0
+    for tr, chosen in zip(traces, per_trace):
+        for k, f in enumerate(chosen):
+            panels.append((row + k // cols, k % cols, tr, f))
+        row += math.ceil(len(chosen) / cols)
+    painter = Painter(traces, row, cols, cell)
     try:
-        painter.draw([(r, c, tr, min(f, tr.steps)) for r, tr in enumerate(traces) for c, f in enumerate(chosen)])
+        used = {(r, c) for r, c, _, _ in panels}
+        for r, line in enumerate(painter.axes):
+            for c, ax in enumerate(line):
+                ax.set_visible((r, c) in used)
+        painter.draw(panels)
         write_with(path, lambda tmp: painter.fig.savefig(tmp, dpi=DPI, format="png"), BilleError)
         return painter.layout
     finally:
         painter.close()
+
+
+def _frames_of(spec: str | None, steps: int) -> list[int]:
+    """The frames of one schedule: frame numbers past its end show its end, once."""
+    if spec in (None, "auto", "all", "end"):
+        return choose_frames(spec, steps)
+    try:
+        numbers = [int(part) for part in spec.split(",") if part.strip()]
+    except ValueError:
+        return choose_frames(spec, steps)  # says what is wrong
+    if not numbers or min(numbers) < 0:
+        return choose_frames(spec, steps)
+    return list(dict.fromkeys(min(n, steps) for n in numbers))
 
 
 def save_gif(traces: Sequence[Trace], path: str | Path, fps: float = 4.0, cell: int = 32, progress=None) -> Layout:

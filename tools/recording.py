@@ -73,6 +73,10 @@ def record(traces: Sequence[Trace], path: str | Path | None = None, *, spawn: bo
     Returns ``{"path", "bytes", "frames", "viewer"}`` where ``viewer`` is None or why no viewer
     was opened. Raises :class:`~bille.instances.BilleError` when the file cannot be written.
     """
+    import dataclasses
+
+    # entity paths take letters, digits, '-', '_' and '.': labels are made so here, and only here
+    traces = [dataclasses.replace(t, label=entity_label(t.label)) for t in traces]
     labels = [t.label for t in traces]
     if len(set(labels)) != len(labels):
         raise BilleError(f"two schedules with the same label in one recording: {labels}")
