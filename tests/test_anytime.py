@@ -55,6 +55,7 @@ def _padded(inst, schedule, waits):
     return Schedule.from_ids(inst, np.concatenate([ids[:, :1], pad, ids[:, 1:]], axis=1))
 
 
+@pytest.mark.slow
 def test_the_windows_shorten_a_padded_schedule_to_the_optimum(monkeypatch):
     monkeypatch.setattr(anytime._Rise, "step", lambda self, until: None)  # no bound search: windows only
     inst = load_instance(bundled_path("corridor-2"))

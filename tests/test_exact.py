@@ -74,6 +74,7 @@ def test_single_carry_leaves_out_the_hand_over(method, optimum):
     assert result.stats["single_carry"] and validate(plain, result.schedule).valid
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("first", [1, 4, 12])
 def test_a_first_horizon_above_or_below_finds_the_same_optimum(first, optimum):
     for name in ("point-move-tile", "handover"):

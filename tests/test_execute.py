@@ -121,6 +121,7 @@ def test_a_schedule_runs_to_the_goal_on_both_brokers(case, tmp_path, broker, cap
     assert_journal_sound(journal, inst)
 
 
+@pytest.mark.slow
 def test_a_failed_action_stops_safely_and_the_run_resumes(case, tmp_path, embedded):
     inst = case[0]
     out, journal = start(case, tmp_path, embedded, extra={1: ["--fail-at", "3"]})
@@ -155,6 +156,7 @@ def test_replan_continues_from_the_reported_state(case, tmp_path, embedded):
     assert_journal_sound(journal, inst)
 
 
+@pytest.mark.slow
 def test_a_stopped_run_resumes_with_a_new_plan(case, tmp_path, embedded):
     inst = case[0]
     out, journal = start(case, tmp_path, embedded, extra={0: ["--fail-at", "5"], 1: ["--fail-at", "5"]})
@@ -166,6 +168,7 @@ def test_a_stopped_run_resumes_with_a_new_plan(case, tmp_path, embedded):
     assert_journal_sound(journal, inst)
 
 
+@pytest.mark.slow
 def test_a_dropped_report_is_recovered_by_a_state_request(case, tmp_path, embedded):
     out, journal = start(case, tmp_path, embedded, extra={0: ["--drop-at", "5"]})
     assert out.status == "completed" and out.worlds_match and not out.faults
@@ -173,6 +176,7 @@ def test_a_dropped_report_is_recovered_by_a_state_request(case, tmp_path, embedd
     assert_journal_sound(journal, case[0])
 
 
+@pytest.mark.slow
 def test_a_killed_robot_stops_the_run_with_a_report(case, tmp_path, embedded):
     out, journal = start(case, tmp_path, embedded, extra={0: ["--die-at", "4"]})
     assert out.status == "stopped" and out.finished == 3
@@ -249,6 +253,7 @@ class Probe:
         raise AssertionError("the robot did not answer")
 
 
+@pytest.mark.slow
 def test_a_killed_executor_resumes_without_repeating_a_pick_or_place(case, tmp_path, embedded):
     inst, ip, sched, sp, picks, places = case
     secrets = {"left": "k-left-0123", "right": "k-right-4567"}
@@ -313,6 +318,7 @@ def test_forged_and_replayed_messages_are_rejected(case, tmp_path, embedded):
         stop_all(procs)
 
 
+@pytest.mark.slow
 def test_a_restarted_robot_ignores_the_orders_of_its_earlier_process(case, tmp_path, embedded):
     # the earlier process's signed initialize and step-1 order, replayed to a fresh process of the
     # same robot with no executor running: refused, and the robot does not move
@@ -444,6 +450,7 @@ def test_robots_that_do_not_answer_are_named(tmp_path, embedded):
     assert not (tmp_path / "j.jsonl").exists()
 
 
+@pytest.mark.slow
 def test_the_command_line_runs_and_resumes_a_stopped_run(tmp_path):
     out = bille("run", MAP, f"{MAP}.schedule", "--journal", "j.jsonl", "--json", cwd=tmp_path)
     assert out.returncode == 0, out.stderr
@@ -465,6 +472,7 @@ def test_the_documented_messages_validate_and_their_signatures_verify():
         assert isinstance(gate.admit(msg["robot"], kind, text.encode()), dict), kind
 
 
+@pytest.mark.slow
 def test_a_journal_line_cut_by_a_crash_is_dropped_before_appending(case, tmp_path, embedded):
     inst = case[0]
     out, journal = start(case, tmp_path, embedded, extra={0: ["--fail-at", "6"]})
@@ -477,6 +485,7 @@ def test_a_journal_line_cut_by_a_crash_is_dropped_before_appending(case, tmp_pat
     assert_journal_sound(journal, inst)
 
 
+@pytest.mark.slow
 def test_point_robots_run_too(tmp_path, embedded):
     ip, sp = str(resolve("point-4")), str(resolve("point-4.schedule"))
     inst, sched = load_instance(ip), load_schedule(sp)

@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import json
 
+import pytest
+
 from hypothesis import assume, event, given, strategies as st
 
 import refmodel
@@ -110,6 +112,7 @@ def build(scene, length, goals_mask):
     return instance_from_text(text, "random"), schedule_from_text(sched_text), schedule, goals, final_tiles
 
 
+@pytest.mark.slow
 @given(scene=scenes(), length=st.integers(0, 25), goals_mask=st.lists(st.booleans(), min_size=3, max_size=3))
 def test_random_valid_walks_are_accepted(scene, length, goals_mask):
     inst, sched, rows, goals, _ = build(scene, length, goals_mask)

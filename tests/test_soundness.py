@@ -165,6 +165,7 @@ QUICK = tiny_instances(30)
 MANY = tiny_instances(200, first_seed=10_000, max_robots=2)  # 3 robots make the reference slow
 
 
+@pytest.mark.slow
 def test_bounds_never_exceed_the_optimum():
     counts = check_bounds(QUICK)
     assert counts["optimal"] >= 12 and counts["infeasible"] >= 3, counts

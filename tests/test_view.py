@@ -171,6 +171,7 @@ def test_png_size_and_colors_at_cells(tmp_path):
     assert _close(_pixel(img, (fx + int(0.22 * 30), fy)), style.robot_color(1))
 
 
+@pytest.mark.slow
 def test_png_rows_are_schedules_and_gif_has_every_frame(tmp_path):
     inst = load_instance(bundled_path("reconfig-30"))
     sched = load_schedule(bundled_path("reconfig-30.schedule"))

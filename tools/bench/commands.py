@@ -2,6 +2,9 @@
 baselines of the same run."""
 from __future__ import annotations
 
+import time
+from pathlib import Path
+
 import click
 
 from bille.instances.bundled import bundled_path
@@ -62,6 +65,40 @@ def bench_anytime(time_limit: float, maps: str) -> int:
     found = rows(names, time_limit, progress=lambda name: click.echo(f"  {name} ...", err=True))
     for line in table(found):
         click.echo(line)
+    return EXIT_OK
+
+
+@bench.command("sweep")
+@click.option("--runs", type=click.IntRange(min=2), default=1000, show_default=True, help="Trivial runs (tiny instances).")
+@click.option("--jobs", "-j", type=click.IntRange(min=1), default=2, show_default=True,
+              help="Local processes, and Dask workers.")
+def bench_sweep(runs: int, jobs: int) -> int:
+    """The sweep engine's overhead: trivial runs per second on local processes and on a local
+    Dask cluster (LocalCluster, one thread per worker) with the same number of workers."""
+    import tempfile
+
+    from distributed import Client, LocalCluster
+
+    from ..sweep.commands import run_spec
+    from ..sweep.spec import parse_spec
+
+    with tempfile.TemporaryDirectory() as tmp:
+        data = {"name": "overhead", "time_limit": 10,
+                "instances": [{"gen": f"crowded --robots 2 --width 5 --height 3 --seed 0..{runs // 2 - 1}"}],
+                "methods": {"temporal-astar": {"horizon": [2, 5]}}}
+        spec = parse_spec(data, Path(tmp) / "overhead.yaml")
+        click.echo(f"{len(spec.runs)} runs: Temporal A* (H 2 and 5) on tiny crowded instances, {jobs} workers")
+        began = time.perf_counter()
+        run_spec(spec, Path(tmp) / "local", jobs=jobs)
+        local = time.perf_counter() - began
+        click.echo(f"local processes: {len(spec.runs) / local:.1f} runs/s ({local:.1f} s)")
+        with LocalCluster(n_workers=jobs, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
+                Client(cluster) as client:
+            began = time.perf_counter()
+            run_spec(spec, Path(tmp) / "dask", client=client)
+            dask = time.perf_counter() - began
+        click.echo(f"local Dask cluster: {len(spec.runs) / dask:.1f} runs/s ({dask:.1f} s); ratio Dask / local "
+                   f"{local / dask:.2f}")
     return EXIT_OK
 
 

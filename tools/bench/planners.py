@@ -2,8 +2,9 @@
 
 Five crowded maps with 2 to 6 robots (bundled ``compare-2`` ... ``compare-6``), movesets S5 and
 S7, joint A* and M* with epsilon in {1, 2, 3}, Temporal A* with epsilon in {1, 2, 3} and H in
-{2, 5, 8}: every run gets the same time limit, runs in its own process, and its schedule is
-validated. Results go to a CSV file, tables like Table I (time steps, tiles traveled, planning
+{2, 5, 8}, LaCAM* (first schedule, and after 1 s): the sweep file ``planners.yaml`` shipped with
+bille, run by the sweep engine (:mod:`bille.tools.sweep`): every run gets the same time limit,
+runs in its own process, and its schedule is validated. Results go to a CSV file, tables like Table I (time steps, tiles traveled, planning
 time; "gave up" or "out of time" when unsolved) and a log-scale plot of planning time like the figure.
 
 Also: Temporal A* with many robots on a large structure (mean replanning time per step).
@@ -12,10 +13,10 @@ from __future__ import annotations
 
 import csv
 import dataclasses
+import json
 import os
 import random
 import time
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 
 import numpy as np
@@ -24,64 +25,41 @@ from ..tables import text_table
 
 MAPS = [f"compare-{m}" for m in range(2, 7)]
 MOVESETS = ("S5", "S7")
-EPSILONS = (1, 2, 3)
-HORIZONS = (2, 5, 8)
-LACAM_IMPROVE = (0.0, 1.0)  # LaCAM*: the first schedule, and the best after improving for 1 s
 FIELDS = ["map", "robots", "moveset", "method", "epsilon", "horizon", "improve", "status", "solved", "makespan",
           "tiles_traveled", "sum_of_costs", "time_s"]
+SWEEP_FILE = Path(__file__).resolve().parent.parent / "sweep" / "files" / "planners.yaml"
 
 
-def configurations(maps=MAPS, movesets=MOVESETS) -> list[dict]:
-    runs = []
-    for name in maps:
-        for ms in movesets:
-            for eps in EPSILONS:
-                runs.append(dict(map=name, moveset=ms, method="astar", epsilon=eps, horizon=None))
-                runs.append(dict(map=name, moveset=ms, method="mstar", epsilon=eps, horizon=None))
-                for H in HORIZONS:
-                    runs.append(dict(map=name, moveset=ms, method="temporal-astar", epsilon=eps, horizon=H))
-            for improve in LACAM_IMPROVE:
-                runs.append(dict(map=name, moveset=ms, method="lacam", epsilon=None, horizon=None, improve=improve))
-    return runs
+def run_grid(time_limit: float, jobs: int, maps=MAPS, movesets=MOVESETS, progress=True, folder=None) -> list[dict]:
+    """The comparison as the sweep file ``planners.yaml`` (shipped with bille) runs it: every run
+    in its own process through the sweep engine, here restricted to ``maps`` and ``movesets``, its
+    results in ``folder`` (measured afresh: earlier results there are replaced)."""
+    import tempfile
+
+    from ..sweep.commands import run_spec
+    from ..sweep.spec import load_spec
+
+    spec = load_spec(SWEEP_FILE)
+    runs = [r for r in spec.runs if r.instance.split()[0] in maps and r.instance.split()[1] in movesets]
+    spec = dataclasses.replace(spec, runs=runs, time_limit=time_limit)
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(folder or tmp) / "planners-sweep"
+        (out / "runs.jsonl").unlink(missing_ok=True)
+        _, rows = run_spec(spec, out, jobs=jobs, quiet=not progress)
+    order = {r.key: k for k, r in enumerate(runs)}
+    return [_planner_row(r) for r in sorted(rows, key=lambda r: order.get(r["key"], len(order)))]
 
 
-def run_one(config: dict, time_limit: float) -> dict:
-    """One experiment, in a worker process."""
-    from bille.instances import check_instance, load_instance, load_moveset
-    from bille.instances.bundled import bundled_path
-    from bille.solvers import solve
-
-    inst = load_instance(bundled_path(config["map"]))
-    inst = check_instance(dataclasses.replace(inst, moveset=load_moveset(config["moveset"])))
-    options = {"time_limit": time_limit}
-    if config["epsilon"] is not None:
-        options["epsilon"] = float(config["epsilon"])
-    if config["horizon"] is not None:
-        options["horizon"] = config["horizon"]
-    if config.get("improve") is not None:
-        options["improve"] = config["improve"]
-    result = solve(inst, config["method"], **options)
-    m = result.metrics
-    return dict(config, robots=inst.num_robots, status=result.status, solved=m is not None,
-                makespan=m.makespan if m else None, tiles_traveled=m.tiles_traveled if m else None,
-                sum_of_costs=result.stats.get("sum_of_costs"), time_s=round(result.time_s, 4))
-
-
-def run_grid(time_limit: float, jobs: int, maps=MAPS, movesets=MOVESETS, progress=True) -> list[dict]:
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
-
-    runs = configurations(maps, movesets)
-    rows = []
-    columns = [TextColumn("planners"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(), TextColumn("{task.description}")]
-    with Progress(*columns, disable=not progress, transient=False) as bar, ProcessPoolExecutor(max_workers=jobs) as pool:
-        task = bar.add_task("", total=len(runs))
-        futures = {pool.submit(run_one, c, time_limit): c for c in runs}
-        for fut in as_completed(futures):
-            row = fut.result()
-            rows.append(row)
-            bar.update(task, advance=1, description=f"{row['map']} {row['moveset']} {label(row)}: {row['status']}")
-    key = {c["map"] + c["moveset"] + label(c): i for i, c in enumerate(runs)}
-    return sorted(rows, key=lambda r: key[r["map"] + r["moveset"] + label(r)])
+def _planner_row(row: dict) -> dict:
+    """A sweep row as a row of the comparison's table."""
+    options, stats = json.loads(row["options"]), json.loads(row["stats"] or "{}")
+    eps = options.get("epsilon")
+    name, moveset = row["instance"].split()
+    return dict(map=name, moveset=moveset, method=row["method"], robots=row["robots"],
+                epsilon=None if eps is None else (int(eps) if float(eps).is_integer() else eps),
+                horizon=options.get("horizon"), improve=options.get("improve"), status=row["status"],
+                solved=row["makespan"] is not None, makespan=row["makespan"], tiles_traveled=row["tiles_traveled"],
+                sum_of_costs=stats.get("sum_of_costs"), time_s=row["time_s"])
 
 
 def label(row: dict) -> str:

@@ -1,0 +1,1 @@
+"""Sweeps: instances x methods x option grids on local processes or a Dask cluster (``bille sweep``)."""

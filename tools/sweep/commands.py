@@ -1,0 +1,97 @@
+"""The ``bille sweep`` commands: run a sweep file, report on its results."""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import click
+
+from ..common import EXIT_OK, stderr_console
+
+
+class _RunByDefault(click.Group):
+    """``bille sweep SPEC.yaml`` runs it; ``bille sweep report RESULTS`` reports."""
+
+    def resolve_command(self, ctx, args):
+        if args and args[0] not in self.commands and not args[0].startswith("-"):
+            args = ["run", *args]
+        return super().resolve_command(ctx, args)
+
+
+@click.group(cls=_RunByDefault)
+def sweep() -> None:
+    """Experiments at scale: bille sweep SPEC.yaml runs instances x methods x options (local
+    processes, or a Dask cluster with --scheduler), resumable; bille sweep report RESULTS."""
+
+
+@sweep.command("run")
+@click.argument("spec_file", metavar="SPEC.yaml")
+@click.option("--out", type=click.Path(file_okay=False), help="Results folder (default: sweep-NAME).")
+@click.option("--jobs", "-j", type=click.IntRange(min=1), help="Runs at a time on this machine (default: CPUs).")
+@click.option("--scheduler", metavar="tcp://HOST:PORT", help="Run on this Dask cluster instead.")
+def run_sweep(spec_file: str, out: str | None, jobs: int | None, scheduler: str | None) -> int:
+    """Run every run of SPEC.yaml (or a sweep shipped with bille: small, planners) not yet recorded
+    in the results folder."""
+    from .spec import load_spec
+
+    spec = load_spec(spec_file)
+    folder, rows = run_spec(spec, out or f"sweep-{spec.name}", jobs=jobs, scheduler=scheduler)
+    click.echo(f"{spec.name}: {len(rows)} runs recorded in {folder} (results.parquet, results.csv, schedules/)")
+    return EXIT_OK
+
+
+def run_spec(spec, out, *, jobs=None, scheduler=None, client=None, quiet=False):
+    """Run the spec's new runs into ``out``; returns the folder and every row recorded."""
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+
+    from .engine import run_dask, run_local
+    from .results import Store
+
+    store = Store(out)
+    todo = [r for r in spec.runs if r.key not in store.keys]
+    skipped = len(spec.runs) - len(todo)
+    failed = 0
+    columns = [TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TextColumn("failed {task.fields[failed]}"),
+               TimeRemainingColumn()]
+    with Progress(*columns, console=stderr_console(), disable=quiet, transient=True) as bar:
+        task = bar.add_task(f"{spec.name}" + (f" ({skipped} done before)" if skipped else ""), total=len(todo),
+                            failed=0)
+
+        def on_row(row):
+            nonlocal failed
+            store.add(row)
+            failed += row["status"] == "failed"
+            bar.update(task, advance=1, failed=failed)
+
+        if client is not None or scheduler:
+            from distributed import Client
+
+            own = client is None
+            client = client or Client(scheduler, timeout="10s")
+            try:
+                run_dask(todo, spec.time_limit, spec.memory_limit, client, on_row)
+            finally:
+                if own:
+                    client.close()
+        else:
+            run_local(todo, spec.time_limit, spec.memory_limit, jobs or os.cpu_count() or 1, on_row)
+    store.finish()
+    return Path(out), store.rows
+
+
+@sweep.command("report")
+@click.argument("results", metavar="RESULTS", type=click.Path(file_okay=False, exists=True))
+@click.option("--no-plots", is_flag=True, help="Only the table.")
+def report(results: str, no_plots: bool) -> int:
+    """Per method configuration: success rate, failed runs, median and worst certified gap, median
+    time; and success.png, cactus.png, gaps.png in RESULTS."""
+    from .report import plots, summary
+    from .results import load_table
+
+    rows = load_table(results)
+    for line in summary(rows):
+        click.echo(line)
+    if not no_plots:
+        written = plots(rows, Path(results))
+        click.echo("plots: " + ", ".join(str(p) for p in written))
+    return EXIT_OK
