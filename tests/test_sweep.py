@@ -134,3 +134,16 @@ def test_the_planner_comparison_as_a_sweep_file_matches_direct_solves(tmp_path):
         direct = solve(inst, row["method"], time_limit=10.0, **options)
         assert row["status"] == direct.status, label(row)
         assert row["makespan"] == (direct.metrics.makespan if direct.metrics else None), label(row)
+
+
+def test_the_load_transfer_experiment_as_a_sweep_file_matches_direct_solves():
+    from bille.tools.bench.transfer import _run, run_maps
+
+    instances = [load_instance(bundled_path(name)) for name in ("lt-4", "lt-7")]
+    rows = run_maps(instances, 10, 5, 60.0)
+    for inst, row in zip(instances, rows):
+        for tag, transfer in (("off", False), ("on", True)):
+            direct = _run(inst, transfer, 10, 5, 60.0)
+            assert row[f"steps_{tag}"] == (direct.metrics.makespan if direct.metrics else None), (inst.name, tag)
+            assert row[f"traveled_{tag}"] == (direct.metrics.tiles_traveled if direct.metrics else None)
+        assert row["relays"] == direct.stats.get("relays", 0) and row["tasks"] == direct.stats.get("jobs")

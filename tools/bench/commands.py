@@ -194,7 +194,7 @@ def bench_load_transfer(maps: str, horizon: int, d_tr: int, time_limit: float, r
     names = _names(maps)
     instances = [instance_arg(name) for name in names]  # unknown names fail here, before any work
     folder = output_folder(out)
-    rows = run_maps(instances, horizon, d_tr, time_limit)
+    rows = run_maps(instances, horizon, d_tr, time_limit, files=names)
     for line in table(rows):
         click.echo(line)
     write_csv(rows, folder / "load-transfer.csv")

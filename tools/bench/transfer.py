@@ -1,7 +1,8 @@
 """``bille bench load-transfer``: the paper's load-transfer experiment (Results, "Load transfer").
 
 Each map runs twice with the reconfiguration loop and Temporal A* (epsilon 1, ``H`` 10 by
-default): without load transfer (the baseline of the same run) and with it (``d_tr`` 5). The
+default): without load transfer (the baseline of the same run) and with it (``d_tr`` 5), as the
+sweep file ``load-transfer.yaml`` shipped with bille, through the sweep engine. The
 table gives the percentage decrease in time steps (makespan) and tiles traveled, as in the
 paper's bar plot, which is drawn to a PNG. With ``--random N`` it also runs random
 reconfiguration instances (10 to 50 tiles moved, 2 to 10 robots): success rate and mean makespan
@@ -11,6 +12,7 @@ instances CP-SAT proves within that time.
 from __future__ import annotations
 
 import csv
+import json
 from pathlib import Path
 
 import numpy as np
@@ -41,18 +43,43 @@ def decrease(before: int | None, after: int | None) -> float | None:
     return round(100.0 * (before - after) / before, 1)
 
 
-def run_maps(instances: list[Instance], horizon: int, d_tr: int, time_limit: float) -> list[dict]:
+SWEEP_FILE = Path(__file__).resolve().parent.parent / "sweep" / "files" / "load-transfer.yaml"
+
+
+def run_maps(instances: list[Instance], horizon: int, d_tr: int, time_limit: float, jobs: int = 1,
+             files: list[str] | None = None) -> list[dict]:
+    """The maps as the sweep file ``load-transfer.yaml`` (shipped with bille) runs them, through
+    the sweep engine, with ``horizon``, ``d_tr`` and ``time_limit`` in place of the file's (the
+    maps ``files``: names or paths, one per instance)."""
+    import tempfile
+
+    import yaml
+
+    from ..sweep.commands import run_spec
+    from ..sweep.spec import parse_spec
+
+    data = yaml.safe_load(SWEEP_FILE.read_text(encoding="utf-8"))
+    data["instances"] = [str(Path(f).resolve()) if Path(f).exists() else f
+                         for f in (files or [inst.name for inst in instances])]
+    data["methods"]["temporal-astar"].update(horizon=horizon, d_tr=d_tr)
+    data["time_limit"] = time_limit
+    spec = parse_spec(data, SWEEP_FILE)
+    with tempfile.TemporaryDirectory() as tmp:
+        _, found = run_spec(spec, Path(tmp) / "load-transfer", jobs=jobs, quiet=True)
+    by = {(r["instance_hash"], json.loads(r["options"])["load_transfer"]): r for r in found}
     rows = []
-    for inst in instances:
-        off, on = (_run(inst, t, horizon, d_tr, time_limit) for t in (False, True))
-        row = {"map": inst.name, "robots": inst.num_robots, "tasks": on.stats.get("jobs"),
-               "relays": on.stats.get("relays", 0), "swaps": on.stats.get("swaps", 0)}
+    for run in spec.runs[::2]:
+        off, on = by[run.instance_hash, False], by[run.instance_hash, True]
+        stats = json.loads(on["stats"] or "{}")
+        inst = instances[len(rows)]
+        row = {"map": inst.name, "robots": on["robots"], "tasks": stats.get("jobs"),
+               "relays": stats.get("relays", 0), "swaps": stats.get("swaps", 0)}
         for tag, res in (("off", off), ("on", on)):
-            m = res.metrics
-            row[f"status_{tag}"] = res.status if res.schedule is not None else res.stats.get("failure", res.status)
-            row[f"steps_{tag}"] = None if m is None else m.makespan
-            row[f"traveled_{tag}"] = None if m is None else m.tiles_traveled
-            row[f"time_{tag}"] = round(res.time_s, 3)
+            failure = json.loads(res["stats"] or "{}").get("failure")
+            row[f"status_{tag}"] = res["status"] if res["schedule"] else (failure or res["error"] or res["status"])
+            row[f"steps_{tag}"] = res["makespan"]
+            row[f"traveled_{tag}"] = res["tiles_traveled"]
+            row[f"time_{tag}"] = None if res["time_s"] is None else round(res["time_s"], 3)
         row["steps_decrease"] = decrease(row["steps_off"], row["steps_on"])
         row["traveled_decrease"] = decrease(row["traveled_off"], row["traveled_on"])
         rows.append(row)
