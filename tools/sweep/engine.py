@@ -17,6 +17,7 @@ import json
 import multiprocessing
 import os
 import platform
+import sys
 import tempfile
 import time
 from concurrent.futures import ThreadPoolExecutor, as_completed
@@ -127,11 +128,18 @@ def _start(child) -> None:
     config = multiprocessing.current_process()._config
     daemon = config.get("daemon")
     config["daemon"] = False
+    # The child needs bille, not the main module; a main module run as a script (the bille
+    # console script) would be run again in every child (170 ms each) unless its path is hidden
+    # while the child's start data are taken.
+    main = sys.modules["__main__"]
+    path = main.__dict__.pop("__file__", None) if getattr(main, "__spec__", None) is None else None
     try:
         child.start()
     finally:
         if daemon is not None:
             config["daemon"] = daemon
+        if path is not None:
+            main.__file__ = path
 
 
 def _mapped() -> int:
