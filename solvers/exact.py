@@ -152,7 +152,7 @@ class _Search:
                                   f"'{self.instance.name}' (bille check says why)")
         else:
             budget = 5.0 if self.deadline is None else min(10.0, 0.1 * (self.deadline - time.perf_counter()))
-            found = first_schedule(self.instance, max(budget, 0.01))
+            found = first_schedule(self.instance, max(budget, 0.01), improve=False)  # a cap: the proof follows
         if found is None:
             return
         self.stats["incumbent"] = {"method": found.method, "makespan": found.makespan}

@@ -41,11 +41,12 @@ def from_schedule(instance: Instance, schedule: Schedule, method: str) -> Incumb
     return Incumbent(bind(instance, schedule)[:, :makespan], makespan, method)
 
 
-def first_schedule(instance: Instance, budget: float) -> Incumbent | None:
+def first_schedule(instance: Instance, budget: float, improve: bool = True) -> Incumbent | None:
     """The shortest valid schedule the heuristics find within ``budget`` seconds, or None.
 
-    Path planning: LaCAM* (complete on a fixed structure) with a little improvement, then
-    Temporal A*. Reconfiguration: the loop with each motion layer (LaCAM*, Temporal A*, M*).
+    Path planning: LaCAM* (complete on a fixed structure), improving for up to a quarter of the
+    budget (at most 1 s) if ``improve``, then Temporal A*. Reconfiguration: the loop with each
+    motion layer (LaCAM*, Temporal A*, M*).
     """
     end = time.perf_counter() + budget
     best = None
@@ -54,7 +55,7 @@ def first_schedule(instance: Instance, budget: float) -> Incumbent | None:
         if left <= 0:
             break
         limit = max(0.01, min(left, share * budget))
-        found = _run(instance, method, limit)
+        found = _run(instance, method, limit, improve)
         if found is None or found.schedule is None:
             continue
         candidate = from_schedule(instance, found.schedule, method)
@@ -63,13 +64,13 @@ def first_schedule(instance: Instance, budget: float) -> Incumbent | None:
     return best
 
 
-def _run(instance: Instance, method: str, limit: float):
+def _run(instance: Instance, method: str, limit: float, improve: bool):
     if instance.is_reconfiguration:
         if instance.collisions == "classic":
             return None
         return reconfigure.plan(instance, motion=method, time_limit=limit, method=method)
     if method == "lacam":
-        return lacam.plan(instance, time_limit=limit, improve=min(1.0, limit / 2))
+        return lacam.plan(instance, time_limit=limit, improve=min(1.0, limit / 2) if improve else 0.0)
     if instance.collisions == "classic":
         return None
     return temporal_astar.plan(instance, time_limit=limit)
