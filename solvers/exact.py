@@ -123,6 +123,7 @@ class _Search:
                                single_carry=single_carry)
         self.minimize_travel = minimize_travel
         self.incumbent: np.ndarray | None = None
+        self.fallback: np.ndarray | None = None
         self.bounds = kw.pop("bounds", None) or lower_bound(instance)
         self.cap = default_cap(self.bounds.lower) if max_makespan is None else max_makespan
         if self.cap < self.bounds.lower:
@@ -137,9 +138,11 @@ class _Search:
         return None if self.deadline is None else self.deadline - time.perf_counter()
 
     def timeout(self, lower: int) -> Result:
-        """Time is up at horizon ``lower``: the incumbent if there is one, else no schedule."""
-        if self.incumbent is not None:
-            return self.result("feasible", self.incumbent, lower=lower)
+        """Time is up at horizon ``lower``: the incumbent if there is one (also one above the
+        horizon cap), else no schedule."""
+        best = self.incumbent if self.incumbent is not None else self.fallback
+        if best is not None:
+            return self.result("feasible", best, lower=lower)
         return self.result("timeout", lower=lower)
 
     def _find_incumbent(self) -> None:
@@ -156,6 +159,7 @@ class _Search:
         if found is None:
             return
         self.stats["incumbent"] = {"method": found.method, "makespan": found.makespan}
+        self.fallback = found.ids  # returned if the search ends without a schedule of its own
         if found.makespan <= self.cap:
             self.incumbent, self.cap = found.ids, found.makespan
             self.stats["horizon_cap"] = found.makespan
@@ -342,7 +346,10 @@ class _Search:
 
     def _infeasible(self) -> Result:
         """No schedule within the horizon cap: not a proof that none exists (a longer one may),
-        so ``unsolved``, with the cap + 1 as the lower bound."""
+        so ``unsolved``, with the cap + 1 as the lower bound; ``feasible`` with that bound if an
+        incumbent above the cap exists."""
+        if self.fallback is not None:
+            return self.result("feasible", self.fallback, lower=self.cap + 1)
         self.stats["failure"] = f"no schedule with a makespan up to the horizon cap {self.cap}"
         return self.result("unsolved", lower=self.cap + 1)
 

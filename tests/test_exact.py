@@ -227,3 +227,19 @@ def test_the_dimacs_dump_is_compact_and_names_variables_first(tmp_path):
     build(inst, 12, Options()).dump(smaller)
     with Solver(name="cadical195", bootstrap_with=CNF(from_file=str(smaller)).clauses) as solver:
         assert not solver.solve()  # and not at 12 (eager connectivity: no cut is missing)
+
+
+@pytest.mark.parametrize("method", ["cpsat", "sat"])
+def test_an_incumbent_above_the_horizon_cap_is_still_returned(method, optimum):
+    inst = TINY["s5-move-tile"]()  # optimum 9, static bound 6
+    best = solve(inst, "bfs", time_limit=300)
+    opt = optimum("s5-move-tile")
+    assert lower_bound(inst).lower <= opt - 1
+    ids = bind(inst, best.schedule)
+    wait = [list(ms.names).index("wait") for ms in inst.movesets]
+    import numpy as np
+
+    padded = Schedule.from_ids(inst, np.concatenate([np.array([wait] * 3).T, ids], axis=1))  # 3 steps late
+    result = solve(inst, method, incumbent=padded, max_makespan=opt - 1)
+    assert result.status == "feasible" and result.lower_bound == opt  # every horizon up to the cap refuted
+    assert result.metrics.makespan == opt + 3 and validate(inst, result.schedule).valid
