@@ -136,15 +136,16 @@ class _Anytime:
             self.best, self.lower = Incumbent(np.zeros((inst.num_robots, 0), np.int64), 0, "none"), 0
             return self.result("optimal")
         self._first()
-        rise = _Background(self) if self.parallel and _FORK is not None else _Rise(self)
+        background = self.parallel and _FORK is not None
+        rise = _Background(self) if background else _Rise(self)
         windows = _Windows(self)
         try:
             while not self.closed() and self.left() > 0:
                 began = time.perf_counter()
-                rise.step(min(self.end, began + (0 if self.parallel else self.slice)))
+                rise.step(min(self.end, began + (0 if background else self.slice)))
                 self.stats["bound_s"] += time.perf_counter() - began
                 if self.closed() or self.best is None or windows.exhausted:
-                    if self.parallel and not self.closed():
+                    if background and not self.closed():
                         rise.wait(min(self.end, time.perf_counter() + self.slice))
                     continue
                 began = time.perf_counter()
