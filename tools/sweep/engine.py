@@ -198,5 +198,10 @@ def run_dask(runs: list[Run], time_limit: float, memory_limit, client, on_row) -
     from distributed import as_completed as dask_completed
 
     futures = client.map(execute, runs, time_limit=time_limit, memory_limit=memory_limit, pure=False)
+    run_of = {fut.key: run for fut, run in zip(futures, runs)}
     for fut in dask_completed(futures):
-        on_row(fut.result())
+        try:
+            on_row(fut.result())
+        except Exception as exc:  # noqa: BLE001 - a lost worker (KilledWorker) is a row too
+            on_row(dict(describe(run_of[fut.key]), status="failed", error=f"worker lost: {type(exc).__name__}: {exc}",
+                        **versions()))
