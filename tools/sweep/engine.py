@@ -201,7 +201,8 @@ def run_dask(runs: list[Run], time_limit: float, memory_limit, client, on_row) -
     run_of = {fut.key: run for fut, run in zip(futures, runs)}
     for fut in dask_completed(futures):
         try:
-            on_row(fut.result())
+            row = fut.result()
         except Exception as exc:  # noqa: BLE001 - a lost worker (KilledWorker) is a row too
-            on_row(dict(describe(run_of[fut.key]), status="failed", error=f"worker lost: {type(exc).__name__}: {exc}",
-                        **versions()))
+            row = dict(describe(run_of[fut.key]), status="failed", error=f"worker lost: {type(exc).__name__}: {exc}",
+                       **versions())
+        on_row(row)
