@@ -9,8 +9,8 @@ step ``k``), incrementally, rebuilding only when the range is exhausted. With la
 each solution is checked step by step and a disconnected one adds cuts for every step before the
 solver goes on. Then, at the optimal makespan, tiles traveled are minimized (``minimize_travel``).
 
-Incumbent: a schedule given with ``incumbent``, or else the best the heuristics find in a tenth of
-the time limit (at most 10 s; :func:`.incumbent.first_schedule`), validated; its makespan caps
+Incumbent: a schedule given with ``incumbent``, or else the best the heuristics find in a
+twentieth of the time limit (at most 1 s; :func:`.incumbent.first_schedule`), validated; its makespan caps
 the horizons, and it is the schedule returned (``feasible``) when time runs out.
 
 Statuses: ``optimal`` (makespan proved optimal; ``stats.tiles_traveled_optimal`` says whether
@@ -154,7 +154,9 @@ class _Search:
                 raise OptionError(f"{self.method}: the incumbent schedule is not valid for instance "
                                   f"'{self.instance.name}' (bille check says why)")
         else:
-            budget = 5.0 if self.deadline is None else min(10.0, 0.1 * (self.deadline - time.perf_counter()))
+            # a cap and a fallback only: a little time, so that refuting an infeasible instance
+            # does not wait for heuristics that cannot succeed
+            budget = 1.0 if self.deadline is None else min(1.0, 0.05 * (self.deadline - time.perf_counter()))
             found = first_schedule(self.instance, max(budget, 0.01), improve=False)  # a cap: the proof follows
         if found is None:
             return
