@@ -13,34 +13,10 @@ from itertools import product
 import numpy as np
 
 from bille.instances import Instance, OptionError
-from bille.instances.moveset import Kind
 from bille.instances.rules import State, apply, goal_violation
 from bille.instances.result import Result
 from bille.instances.schedule import Schedule
-
-
-def candidate_actions(instance: Instance, state: State, i: int) -> list[int]:
-    """Robot ``i``'s actions that pass its own rules 1, 2 and 4 on the current tiles.
-
-    Rules between robots are left to :func:`~bille.instances.rules.apply`; a robot's new foot
-    cannot become a tile by another robot's action in the same step without a collision, so this
-    filter loses no valid joint action.
-    """
-    g = instance.world.graphs[i]
-    p, carrying, tiles = state.poses[i], state.carrying[i], state.tiles
-    out = []
-    for a in range(g.num_actions):
-        if g.succ[p, a] < 0 or (carrying and not g.carry_ok[p, a]):
-            continue
-        kind, t = g.kind[a], g.target[p, a]
-        if kind == Kind.PICK and (carrying or not tiles[t]):
-            continue
-        if kind == Kind.PLACE and (not carrying or tiles[t]):
-            continue
-        if kind in (Kind.WAIT, Kind.MOTION) and not tiles[g.need[p, a]].all():
-            continue
-        out.append(a)
-    return out
+from bille.instances.successors import candidate_actions, disjoint_products
 
 
 def plan(instance: Instance, *, time_limit: float | None = None, max_steps: int = 64,
@@ -91,7 +67,7 @@ def plan(instance: Instance, *, time_limit: float | None = None, max_steps: int 
                               time_s=time.perf_counter() - start)
             expanded += 1
             options = [candidate_actions(instance, s, i) for i in range(instance.num_robots)]
-            joints = product(*options) if world.classic else _disjoint_products(instance, s, options)
+            joints = product(*options) if world.classic else disjoint_products(instance, s, options)
             for joint in joints:
                 new = apply(world, s, joint)
                 if isinstance(new, State):
@@ -105,37 +81,6 @@ def plan(instance: Instance, *, time_limit: float | None = None, max_steps: int 
         return Result("bfs", "unsolved", lower_bound=max_steps + 1, stats=stats("step bound"),
                       time_s=time.perf_counter() - start)
     return Result("bfs", "infeasible", stats=stats(), time_s=time.perf_counter() - start)
-
-
-def _disjoint_products(instance: Instance, state: State, options: list[list[int]]):
-    """Joint actions whose collision sets are pairwise disjoint (rule 3), by backtracking.
-
-    Pruning here only saves work: every joint action yielded is still checked by ``apply``.
-    """
-    sets = []
-    for i, opts in enumerate(options):
-        g, p, carrying = instance.world.graphs[i], state.poses[i], state.carrying[i]
-        row = []
-        for a in opts:
-            cells = set(g.coll[p, a].tolist())
-            if carrying:
-                cells |= set(g.carry[p, a].tolist())
-            cells.discard(-1)
-            row.append((a, frozenset(cells)))
-        sets.append(row)
-    chosen: list[int] = []
-
-    def extend(i: int, used: frozenset):
-        if i == len(sets):
-            yield tuple(chosen)
-            return
-        for a, cells in sets[i]:
-            if used.isdisjoint(cells):
-                chosen.append(a)
-                yield from extend(i + 1, used | cells)
-                chosen.pop()
-
-    yield from extend(0, frozenset())
 
 
 def _unwind(instance: Instance, parent: dict, state: State) -> Schedule:

@@ -13,7 +13,7 @@ import itertools
 
 from bille.instances.moveset import Kind
 from bille.instances.rules import State, apply
-from bille.solvers.bfs import candidate_actions
+from bille.instances.successors import candidate_actions
 
 
 def optimal_soc(instance, max_states: int = 200_000) -> tuple[int, int] | None:

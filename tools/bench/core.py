@@ -20,7 +20,7 @@ from bille.instances import Grid, Instance, Robot, compile_posegraph, load_moves
 from bille.instances.grid import is_connected
 from bille.instances.rules import State, apply
 from bille.solvers import Schedule, bind, dump_schedule, schedule_from_text, validate
-from bille.solvers.bfs import candidate_actions
+from bille.instances.successors import candidate_actions
 
 
 def holey_square(size: int, rnd: random.Random) -> np.ndarray:
