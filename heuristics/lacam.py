@@ -92,24 +92,47 @@ def joint_plan(problem: JointProblem, *, objective: str = "makespan", time_limit
         raise OptionError(f"lacam: unknown objective '{objective}' (expected one of: {', '.join(OBJECTIVES)})")
     if improve < 0:
         raise OptionError(f"lacam: improve must be >= 0 seconds, got {improve}")
-    return _LaCAM(problem, objective, time_limit, improve, max_nodes, seed, pinned or {}).run()
+    rng = random.Random(seed)
+    space = PoseSpace(problem, objective, rng, pinned or {})
+    stats = {"objective": f"{objective}, walking only (no pick or place)"}
+    status, steps, stats = search(space, rng, time_limit=time_limit, improve=improve, max_nodes=max_nodes,
+                                  stats=stats)
+    if status == "exhausted":
+        stats["failure"] = NO_WALK
+        status = "unsolved"
+    return status, steps, stats
 
 
-class _LaCAM:
-    def __init__(self, problem: JointProblem, objective, time_limit, improve, max_nodes, seed, pinned) -> None:
+class PoseSpace:
+    """The configurations of :class:`JointProblem` (one pose per robot) as LaCAM*'s search space:
+    its generator (:mod:`.pibt`), its objective's step cost and admissible estimate."""
+
+    def __init__(self, problem: JointProblem, objective: str, rng: random.Random, pinned: dict) -> None:
         self.problem, self.pinned = problem, pinned
         self.m = len(problem.walks)
         self.makespan = objective == "makespan"
-        self.start = time.perf_counter()
-        self.deadline = None if time_limit is None else self.start + time_limit
-        self.improve, self.max_nodes = improve, max_nodes
-        self.rng = random.Random(seed)
-        self.classic = problem.instance.collisions == "classic"
-        self.generator = (Classic if self.classic else Bille)(problem, self.rng)
-        self.stats: dict = {"objective": f"{objective}, walking only (no pick or place)", "nodes": 0,
-                            "generated": 0, "improvements": []}
+        self.generator = (Classic if problem.instance.collisions == "classic" else Bille)(problem, rng)
 
-    # ---- costs ----------------------------------------------------------------------------------
+    def start(self) -> Poses:
+        return tuple(self.problem.start)
+
+    def unreachable(self) -> list[int]:
+        return self.problem.unreachable()
+
+    def num_moves(self, i: int, config: Poses) -> int:
+        return len(self.problem.moves(i, config[i]))
+
+    def generate(self, config: Poses, order: list[int], forced: tuple, first: bool):
+        return self.generator.generate(config, order, forced, self.pinned if first else {})
+
+    def is_goal(self, config: Poses) -> bool:
+        return self.problem.is_goal(config)
+
+    def resting(self, i: int, config: Poses) -> bool:
+        return self.problem.at_goal(i, config[i])
+
+    def first_priorities(self, config: Poses) -> list[float]:
+        return [d[p] / 10_000 for d, p in zip(self.problem.dist_lists, config)]
 
     def h(self, config: Poses) -> int:
         ds = [d[p] for d, p in zip(self.problem.dist_lists, config)]
@@ -121,15 +144,35 @@ class _LaCAM:
         at = self.problem.at_goal
         return sum(1 for i, (p, q) in enumerate(zip(a, b)) if not (p == q and at(i, q)))
 
-    def node(self, config: Poses, parent: _Node | None, actions, g: int) -> _Node:
+
+def search(space, rng: random.Random, *, time_limit: float | None = None, improve: float = 0.0,
+           max_nodes: int = 2_000_000, stats: dict | None = None) -> tuple[str, list | None, dict]:
+    """LaCAM* over any search ``space`` (:class:`PoseSpace`, or whole states in
+    :mod:`.lacam_states`): ``(status, joint actions or None, stats)`` with status ``optimal``
+    (the improvement exhausted the space), ``feasible``, ``timeout``, ``unsolved`` (node cap or
+    an unreachable goal; ``stats["failure"]``) or ``exhausted`` (no goal in the whole space:
+    the caller says what that proves)."""
+    return _LaCAM(space, rng, time_limit, improve, max_nodes, stats or {}).run()
+
+
+class _LaCAM:
+    def __init__(self, space, rng: random.Random, time_limit, improve, max_nodes, stats: dict) -> None:
+        self.space = space
+        self.m = space.m
+        self.start = time.perf_counter()
+        self.deadline = None if time_limit is None else self.start + time_limit
+        self.improve, self.max_nodes = improve, max_nodes
+        self.rng = rng
+        self.stats: dict = {**stats, "nodes": 0, "generated": 0, "improvements": []}
+
+    def node(self, config, parent: _Node | None, actions, g: int) -> _Node:
+        space = self.space
         if parent is None:
-            dist = self.problem.dist_lists
-            priority = [d[p] / 10_000 for d, p in zip(dist, config)]
+            priority = space.first_priorities(config)
         else:
-            at = self.problem.at_goal
-            priority = next_priorities(parent.priority, (at(i, p) for i, p in enumerate(config)))
+            priority = next_priorities(parent.priority, (space.resting(i, config) for i in range(self.m)))
         order = sorted(range(self.m), key=lambda i: -priority[i])
-        node = _Node(config, parent, actions, g, self.h(config), priority, order)
+        node = _Node(config, parent, actions, g, space.h(config), priority, order)
         node.tree.append(())
         self.stats["nodes"] += 1
         return node
@@ -137,11 +180,12 @@ class _LaCAM:
     # ---- the search -------------------------------------------------------------------------------
 
     def run(self) -> tuple[str, list | None, dict]:
-        if self.problem.unreachable():
-            self.stats["unreachable"] = self.problem.unreachable()
+        space = self.space
+        if space.unreachable():
+            self.stats["unreachable"] = space.unreachable()
             self.stats["failure"] = "unreachable"
             return "unsolved", None, self.stats
-        root = self.node(tuple(self.problem.start), None, None, 0)
+        root = self.node(space.start(), None, None, 0)
         explored = {root.config: root}
         self.open: list[_Node] = [root]
         self.best: _Node | None = None
@@ -157,7 +201,7 @@ class _LaCAM:
             if self.best is not None and node.g + node.h >= self.best.g:
                 self.open.pop()
                 continue
-            if self.problem.is_goal(node.config):
+            if space.is_goal(node.config):
                 self._found(node)
                 self.open.pop()
                 if self.improve == 0:
@@ -171,15 +215,15 @@ class _LaCAM:
             forced = node.tree.popleft()
             if len(forced) < self.m:
                 i = node.order[len(forced)]
-                moves = list(range(len(self.problem.moves(i, node.config[i]))))
+                moves = list(range(space.num_moves(i, node.config)))
                 self.rng.shuffle(moves)
                 node.tree.extend(forced + ((i, k),) for k in moves)
-            got = self.generator.generate(node.config, node.order, forced, self.pinned if node is root else {})
+            got = space.generate(node.config, node.order, forced, node is root)
             if got is None:
                 continue
             actions, nxt = got
             self.stats["generated"] += 1
-            cost = self.cost(node.config, nxt)
+            cost = space.cost(node.config, nxt)
             known = explored.get(nxt)
             if known is None:
                 if len(explored) >= self.max_nodes:
@@ -200,8 +244,7 @@ class _LaCAM:
             if "failure" in self.stats:
                 return "unsolved", None, self.stats
             if exhausted:
-                self.stats["failure"] = NO_WALK
-                return "unsolved", None, self.stats
+                return "exhausted", None, self.stats
             self.stats["failure"] = "time limit"
             return "timeout", None, self.stats
         self.stats["cost"] = self.best.g
@@ -232,7 +275,7 @@ class _LaCAM:
                     queue.append(child)
                     if self.best is not None and child.g + child.h < self.best.g:
                         self.open.append(child)
-                    if self.problem.is_goal(child.config):
+                    if self.space.is_goal(child.config):
                         self._found(child)
 
     @staticmethod
