@@ -81,6 +81,10 @@ class Walk:
         """Poses standing on the structure from which a pick or place targets ``cell``."""
         return np.flatnonzero((self._targets == cell).any(axis=1))
 
+    def facing_any(self, cells) -> np.ndarray:
+        """Poses standing on the structure from which a pick or place targets one of ``cells``."""
+        return np.flatnonzero(np.isin(self._targets, cells).any(axis=1))
+
     def manipulation(self, pose: int, cell: int, kind: Kind) -> int | None:
         """The pick (or place) action of ``pose`` that targets ``cell``, or None."""
         for a in np.flatnonzero(self._targets[pose] == cell).tolist():

@@ -7,9 +7,10 @@ decided here, not by the planners.
 """
 from __future__ import annotations
 
+import time
 from typing import Callable
 
-from bille.heuristics import astar, lacam, mstar, reconfigure, temporal_astar
+from bille.heuristics import astar, lacam, lacam_states, mstar, reconfigure, temporal_astar
 from bille.instances import Instance, OptionError
 from bille.instances.result import Result
 
@@ -50,18 +51,33 @@ def plan_mstar(instance: Instance, *, epsilon: float = 1.0, od: bool = True, tim
 def plan_lacam(instance: Instance, *, objective: str = "makespan", time_limit: float | None = None,
                improve: float = 1.0, max_nodes: int = 2_000_000, seed: int = 0, load_transfer: bool = False,
                d_tr: int = 5, max_steps: int | None = None) -> Result:
-    """LaCAM* (:func:`bille.heuristics.lacam.plan`); on an instance that moves tiles, the
+    """LaCAM* (:func:`bille.heuristics.lacam.plan`). On an instance that moves tiles, the
     reconfiguration loop with LaCAM* as its motion layer (``load_transfer``, ``d_tr``,
-    ``max_steps`` as for the loop; ``objective``, ``improve``, ``max_nodes`` and ``seed`` are for
-    path planning)."""
-    if instance.is_reconfiguration:
-        if instance.collisions == "classic":
-            raise OptionError(f"lacam: instance '{instance.name}' moves tiles under classic collisions; "
-                              "the reconfiguration loop plans under the Bill-E rule only")
-        return reconfigure.plan(instance, motion="lacam", load_transfer=load_transfer, d_tr=d_tr,
-                                time_limit=time_limit, max_steps=max_steps, method="lacam")
-    return lacam.plan(instance, objective=objective, time_limit=time_limit, improve=improve, max_nodes=max_nodes,
-                      seed=seed)
+    ``max_steps`` as for the loop), and where the loop gives up, LaCAM* over whole states
+    (:mod:`bille.heuristics.lacam_states`) with the time left: complete, so the method finds a
+    schedule whenever one exists (time and memory permitting) and proves ``infeasible`` when its
+    space is exhausted. ``objective`` is for path planning; ``improve``, ``max_nodes`` and
+    ``seed`` for the searches over configurations."""
+    if not instance.is_reconfiguration:
+        return lacam.plan(instance, objective=objective, time_limit=time_limit, improve=improve,
+                          max_nodes=max_nodes, seed=seed)
+    if instance.collisions == "classic":
+        raise OptionError(f"lacam: instance '{instance.name}' moves tiles under classic collisions; "
+                          "the reconfiguration loop plans under the Bill-E rule only")
+    if objective != "makespan":
+        raise OptionError(f"lacam: objective '{objective}' is for path planning; a reconfiguration is "
+                          "planned for its makespan")
+    start = time.perf_counter()
+    loop = reconfigure.plan(instance, motion="lacam", load_transfer=load_transfer, d_tr=d_tr,
+                            time_limit=time_limit, max_steps=max_steps, method="lacam")
+    if loop.status != "unsolved":
+        return loop
+    left = None if time_limit is None else time_limit - (time.perf_counter() - start)
+    if left is not None and left <= 0:
+        return loop
+    whole = lacam_states.plan(instance, time_limit=left, improve=improve, max_nodes=max_nodes, seed=seed)
+    whole.stats["loop"] = {"failure": loop.stats.get("failure"), "steps": loop.stats.get("steps", 0)}
+    return whole
 
 
 CLASSIC = ("astar", "lacam", "bfs")  # the methods that plan under classic collisions (DESIGN §3)

@@ -7,6 +7,7 @@ import pytest
 
 from bille.instances import InstanceError, load_instance
 from bille.instances.bundled import bundled_path
+from bille.heuristics import lacam_states
 from bille.instances.generators.random import crowded
 from bille.solvers import solve, validate
 from helpers import make
@@ -141,15 +142,53 @@ def test_sum_of_loss_objective():
     assert result.stats["objective"].startswith("sum-of-loss")
 
 
-@pytest.mark.parametrize("inst", [i for i in tiny_instances(36) if i is not None and i.is_reconfiguration],
-                         ids=lambda inst: inst.name)
-def test_the_loop_with_lacam_solves_what_the_paper_loop_solves(inst):
-    # the loop's limits (one robot per job, jobs in order) remain; its motion layer no longer adds any
-    paper = solve(inst, "temporal-astar", time_limit=60, load_transfer=True)
-    result = solve(inst, "lacam", time_limit=60, load_transfer=True)
-    if result.schedule is not None:
-        assert validate(inst, result.schedule).valid
-        best = solve(inst, "bfs", time_limit=60)
-        assert best.status != "optimal" or result.metrics.makespan >= best.metrics.makespan
-    if paper.status == "feasible":
+TINY_RECONFIGURATION = tiny_instances(36)
+
+
+@lru_cache(maxsize=None)
+def brute_force(name: str):
+    inst = next(i for i in TINY_RECONFIGURATION if i.name == name)
+    return solve(inst, "bfs", time_limit=60)
+
+
+@lru_cache(maxsize=None)
+def with_lacam(name: str):
+    # the loop first; where it gives up, LaCAM* over whole states, which is complete
+    inst = next(i for i in TINY_RECONFIGURATION if i.name == name)
+    return solve(inst, "lacam", time_limit=60, load_transfer=True, improve=0.0)
+
+
+@pytest.mark.parametrize("inst", TINY_RECONFIGURATION, ids=lambda inst: inst.name)
+def test_lacam_solves_every_tiny_reconfiguration_that_brute_force_solves(inst):
+    result = with_lacam(inst.name)
+    best = brute_force(inst.name)
+    assert best.status in ("optimal", "infeasible")
+    if best.status == "optimal":
         assert result.status == "feasible", result.stats
+        assert validate(inst, result.schedule).valid
+        assert result.metrics.makespan >= best.metrics.makespan
+    else:  # the whole-state search exhausts its space: a proof, as the brute force's
+        assert result.status == "infeasible" and result.schedule is None, result.stats
+
+
+def test_the_tiny_reconfigurations_include_both_answers_and_loop_failures():
+    answers = {brute_force(inst.name).status for inst in TINY_RECONFIGURATION}
+    assert answers == {"optimal", "infeasible"}
+    rescued = [inst.name for inst in TINY_RECONFIGURATION if brute_force(inst.name).status == "optimal"
+               and "loop" in with_lacam(inst.name).stats]
+    assert rescued  # instances where the loop gave up and the whole-state search found a schedule
+
+
+@pytest.mark.parametrize("inst", [i for i in TINY_RECONFIGURATION[:24]], ids=lambda inst: inst.name)
+def test_whole_state_search_improves_to_the_brute_force_optimum(inst):
+    result = lacam_states.plan(inst, time_limit=60, improve=30.0)
+    best = brute_force(inst.name)
+    if best.status == "infeasible":
+        assert result.status == "infeasible"
+        return
+    steps = validate(inst, result.schedule)
+    assert steps.valid and steps.metrics.makespan >= best.metrics.makespan
+    gains = [cost for _, cost in result.stats["improvements"]]
+    assert gains == sorted(gains, reverse=True)  # anytime: never worse
+    if result.status == "optimal":  # the space was exhausted: the claim is a proof
+        assert steps.metrics.makespan == best.metrics.makespan
