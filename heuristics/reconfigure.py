@@ -108,7 +108,7 @@ class Loop(Allocation, LoadTransfer, Manipulation, Motion):
         self.epsilon, self.horizon = epsilon, horizon
         self.start_time = time.perf_counter()
         self.deadline = None if time_limit is None else self.start_time + time_limit
-        self.jobs: list[Job] = sequence_of(instance)
+        self.jobs: list[Job] = sequence_of(instance, deadline=self.deadline)
         self.state: State = instance.start_state
         self.legs: list[list[Leg]] = [[] for _ in range(m)]
         self.next_job = 0

@@ -20,11 +20,24 @@ structure. A choice that leads to a state where nothing can run is undone (depth
 budget of dead ends); a fixed minimum-cost matching was tried first and dropped, since the
 pairs it fixes often cannot all run in any order.
 
+When that finds nothing, a second search allows *temporary placements*: a job may take any tile
+whose pick keeps the structure connected (one that stays too) and put it on any empty cell
+next to the structure (one that must stay empty too), to be moved on or back by a later job.
+It is a best-first search over tile sets, each visited once, on the jobs so far plus the cells
+still to empty; within a tile set, the jobs from the cells to empty to the cells to fill come
+first (in the order above), then the others (tiles that cut a robot off from other work first,
+then the shortest carries). It is complete over sequences of one-robot
+jobs: when it has visited every tile set those jobs reach, none ends in the goal, and the
+loop says ``unsolved`` with that reason; otherwise it stops at its budget of tile sets or at
+the deadline.
+
 Deliveries go first, each to the nearest fill cell (from the carrier's front foot) that touches
 the structure.
 """
 from __future__ import annotations
 
+import heapq
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -59,10 +72,11 @@ class NoSequence(Exception):
     ``unsolved``); not a proof that none exists, and not bad input."""
 
 
-def sequence_of(instance: Instance) -> list[Job]:
-    """The instance's ``tasks`` (checked) with deliveries first, or a derived sequence."""
+def sequence_of(instance: Instance, *, deadline: float | None = None) -> list[Job]:
+    """The instance's ``tasks`` (checked) with deliveries first, or a derived sequence (searched
+    until ``deadline``, a ``time.perf_counter()`` value)."""
     if instance.tasks is None:
-        return derive(instance)
+        return derive(instance, deadline=deadline)
     w = instance.width
     tasks = [Job(t.pick[1] * w + t.pick[0], t.place[1] * w + t.place[0]) for t in instance.tasks]
     after = instance.start.tiles.copy()  # the tasks' end, ignoring errors (check() names them)
@@ -118,8 +132,11 @@ def check(instance: Instance, jobs: list[Job], *, given: bool = False) -> None:
                             f"(extra tiles at {extra}, missing at {missing})")
 
 
-def derive(instance: Instance, *, budget: int = 200) -> list[Job]:
-    """A valid sequence for ``instance`` (see the module docstring), or :class:`NoSequence`."""
+def derive(instance: Instance, *, budget: int = 200, max_sets: int = 20_000,
+           deadline: float | None = None) -> list[Job]:
+    """A valid sequence for ``instance`` (see the module docstring), or :class:`NoSequence`:
+    ``budget`` dead ends for the first search, ``max_sets`` tile sets for the one with temporary
+    placements, both until ``deadline``."""
     w, h = instance.width, instance.height
     start, goal = instance.start.tiles, instance.goal_tiles
     jobs = _deliveries(instance, start & goal, goal & ~start)
@@ -131,9 +148,11 @@ def derive(instance: Instance, *, budget: int = 200) -> list[Job]:
     graph = instance.world.graphs[0]
     order = _order(tiles, empty, fill, graph, w, h, budget)
     if order is None:
-        raise NoSequence(f"no order of the tile moves found that keeps the structure connected "
-                         f"and lets a robot reach every pick and place ({budget} dead ends searched); "
-                         "a task list given with the instance is used as it is")
+        graphs = list({id(g): g for g in instance.world.graphs}.values())  # any robot type may serve a job
+        search = _Setting(tiles, goal, instance.start.obstacles, graphs, w, h, max_sets, deadline)
+        order = search.run()
+        if order is None:
+            raise NoSequence(search.why() + "; a task list given with the instance is used as it is")
     jobs += [Job(p, q) for p, q in order]
     check(instance, jobs)
     return jobs
@@ -161,14 +180,15 @@ def _deliveries(instance: Instance, fixed: np.ndarray, free: np.ndarray) -> list
     return jobs
 
 
-def _critical(tiles: np.ndarray, empty: list[int], fill: list[int], graph) -> dict[int, int]:
-    """For each cell still to empty: how many other cells to empty or fill it would leave with no
-    pose facing them if it were picked now (poses on the tiles plus every cell to fill, the
-    most a later pick or place can stand on)."""
+def _critical(tiles: np.ndarray, empty: list[int], fill: list[int], graph,
+              candidates: list[int] | None = None) -> dict[int, int]:
+    """For each cell still to empty (or each of ``candidates``): how many cells to empty or fill
+    it would leave with no pose facing them if it were picked now (poses on the tiles plus every
+    cell to fill, the most a later pick or place can stand on)."""
     future = tiles.copy()
     future[fill] = True
     walk = walk_for(graph, future)
-    out = dict.fromkeys(empty, 0)
+    out = dict.fromkeys(empty if candidates is None else candidates, 0)
     for c in empty + fill:
         feet = graph.feet[walk.facing_poses(c)]
         if len(feet) == 0:
@@ -211,6 +231,93 @@ def _order(tiles: np.ndarray, empty: list[int], fill: list[int], graph, w: int, 
         return None
 
     return go(tiles.copy(), list(empty), list(fill))
+
+
+class _Setting:
+    """The search with temporary placements (module docstring): best first over tile sets."""
+
+    def __init__(self, tiles, goal, obstacles, graphs, w: int, h: int, max_sets: int,
+                 deadline: float | None) -> None:
+        self.start, self.goal, self.obstacles, self.w, self.h = tiles.copy(), goal, obstacles, w, h
+        self.graphs, self.graph = graphs, graphs[0]  # critical picks: by the first robot's moveset
+        self.max_sets, self.deadline = max_sets, deadline
+        self.nbr = neighbour_table(w, h)
+        self.seen: set[bytes] = set()
+        self.stopped: str | None = None
+
+    def why(self) -> str:
+        if self.stopped == "time":
+            return (f"no sequence of tile moves found before the time limit ({len(self.seen)} tile sets "
+                    "searched, temporary placements included)")
+        if self.stopped == "budget":
+            return (f"no sequence of tile moves found within {self.max_sets} tile sets (temporary "
+                    "placements included)")
+        return (f"no sequence of one-robot tile moves reaches the goal: all {len(self.seen)} tile sets they "
+                "reach were searched, temporary placements included")
+
+    def run(self) -> list | None:
+        """Best first on ``jobs so far + cells still to empty`` (each job empties at most one),
+        taking one job of a tile set at a time: a tile set whose jobs are not all tried goes
+        back with its key, so the direct jobs are followed depth first and a temporary placement
+        is tried only when every shorter sequence is out."""
+        start = self.start
+        self.seen.add(start.tobytes())
+        count = 0
+        heap = [(self._h(start), 0, start, self._moves(start), [])]
+        while heap:
+            if self.deadline is not None and time.perf_counter() > self.deadline:
+                self.stopped = "time"
+                return None
+            f, order, tiles, moves, path = heapq.heappop(heap)
+            move = next(moves, None)
+            if move is None:
+                continue
+            heapq.heappush(heap, (f, order, tiles, moves, path))
+            p, q = move
+            nxt = tiles.copy()
+            nxt[p], nxt[q] = False, True
+            key = nxt.tobytes()
+            if key in self.seen:
+                continue
+            if np.array_equal(nxt, self.goal):
+                return path + [(p, q)]
+            if len(self.seen) >= self.max_sets:
+                self.stopped = "budget"
+                return None
+            self.seen.add(key)
+            count += 1
+            heapq.heappush(heap, (len(path) + 1 + self._h(nxt), -count, nxt, self._moves(nxt), path + [(p, q)]))
+        return None
+
+    def _h(self, tiles) -> int:
+        return int((tiles & ~self.goal).sum())
+
+    def _runnable(self, tiles, cut, p: int, q: int) -> bool:
+        return any(runnable(tiles, cut, p, q, self.nbr, g, self.w, self.h) for g in self.graphs)
+
+    def _moves(self, tiles):
+        """The runnable jobs on ``tiles``, lazily: from cells to empty to cells to fill first
+        (critical picks last, then the shortest carry), then every other pick and place (critical
+        picks first, then the shortest carry)."""
+        goal, w, h = self.goal, self.w, self.h
+        cut = articulation_points(tiles, w, h)
+        empty = np.flatnonzero(tiles & ~goal).tolist()
+        fill = np.flatnonzero(goal & ~tiles).tolist()
+        critical = _critical(tiles, empty, fill, self.graph)
+        direct = sorted((critical[p], _carry(p, q, w), p, q) for p in empty for q in fill if not cut[p])
+        for *_, p, q in direct:
+            if self._runnable(tiles, cut, p, q):
+                yield p, q
+        pickable = np.flatnonzero(tiles & ~cut).tolist()
+        blocking = _critical(tiles, empty, fill, self.graph, candidates=pickable)
+        edge = [c for c in range(w * h) if not tiles[c] and not self.obstacles[c]
+                and any(n >= 0 and tiles[n] for n in self.nbr[c])]
+        to_empty, to_fill = set(empty), set(fill)  # their pairs came first
+        others = sorted((-blocking[p], _carry(p, q, w), p, q) for p in pickable for q in edge
+                        if not (p in to_empty and q in to_fill))
+        for *_, p, q in others:
+            if self._runnable(tiles, cut, p, q):
+                yield p, q
 
 
 __all__ = ["Job", "NoSequence", "SequenceError", "apply_move", "check", "derive", "sequence_of"]

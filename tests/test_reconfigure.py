@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from bille.heuristics.reconfigure import Leg, Loop, plan
-from bille.heuristics.sequence import SequenceError, check, derive, sequence_of
+from bille.heuristics.sequence import NoSequence, SequenceError, check, derive, sequence_of
 from bille.instances import instance_from_text, load_instance
 from bille.instances.bundled import bundled_path
 from bille.instances.generators.random import random_reconfiguration
@@ -47,6 +47,31 @@ def test_a_derived_sequence_keeps_the_structure_connected_one_task_at_a_time(see
         tiles[job.place] = True
         assert is_connected(tiles, inst.width, inst.height)
     assert np.array_equal(tiles, inst.goal_tiles)
+
+
+def test_a_tile_that_stays_moves_out_of_the_way_and_back():
+    # the one tile to move, (0, 0), cannot go first (the rest would fall apart), and the robot
+    # stands on the only other tile it could fill (1, 1) from: the tile under it serves first
+    inst = make("TT.\nT..", [{"at": [0, 1]}], goal=".T.\nTT.", moveset="point", robot_goals=[[0, 1]])
+    jobs = derive(inst)
+    assert [(inst.world.xy(j.pick), inst.world.xy(j.place)) for j in jobs] == [((0, 1), (1, 1)), ((0, 0), (0, 1))]
+    check(inst, jobs)
+    for method in ("temporal-astar", "mstar", "lacam"):
+        result = solve(inst, method, time_limit=30)
+        assert result.status == "feasible" and "loop" not in result.stats, (method, result.stats)
+        assert validate(inst, result.schedule).valid
+        assert result.metrics.makespan >= solve(inst, "bfs").metrics.makespan
+
+
+def test_a_derivation_that_exhausts_its_search_says_so():
+    # an S7 robot in a one-row corridor cannot turn with the tile: no job can run at all
+    inst = make("TTTT.", [{"front": [2, 0], "back": [3, 0]}], goal=".TTTT")
+    with pytest.raises(NoSequence, match="all 1 tile sets they reach were searched"):
+        derive(inst)
+    paper = solve(inst, "temporal-astar", time_limit=30)
+    assert paper.status == "unsolved" and "were searched" in paper.stats["failure"]
+    assert solve(inst, "bfs").status == "infeasible"
+    assert solve(inst, "lacam", time_limit=30).status == "infeasible"  # the whole-state search agrees
 
 
 def test_given_tasks_are_used_as_given():
@@ -262,19 +287,12 @@ def test_an_early_pick_keeps_the_tile_a_later_place_stands_on():
 
 
 def test_a_sequence_the_loop_cannot_derive_is_unsolved_not_bad_input(capsys, tmp_path):
-    # moving (0, 0) to (1, 1) disconnects the structure unless another tile serves first: the
-    # brute-force search finds 8 steps; the loop's sequence derivation gives up, which is a
-    # status (exit 1), not bad input (exit 2)
-    inst = make("TT.\nT..", [{"at": [0, 1]}], goal=".T.\nTT.", moveset="point", robot_goals=[[0, 1]])
-    assert solve(inst, "bfs").metrics.makespan == 8
-    for method in ("temporal-astar", "mstar"):
-        result = solve(inst, method)
-        assert result.status == "unsolved" and result.schedule is None
-        assert "no order of the tile moves" in result.stats["failure"]
+    # no job can run (an S7 robot cannot turn in a one-row corridor): the derivation gives up,
+    # which is a status (exit 1), not bad input (exit 2)
     path = tmp_path / "hard.yaml"
-    path.write_text("name: hard\nmoveset: point\ngrid: |\n  TT.\n  T..\ngoal: |\n  .T.\n  TT.\n"
-                    "robots: [{at: [0, 1]}]\nrobot_goals: [[0, 1]]\n")
+    path.write_text("name: hard\nmoveset: S7\ngrid: |\n  TTTT.\ngoal: |\n  .TTTT\n"
+                    "robots: [{front: [2, 0], back: [3, 0]}]\n")
     code, out, _ = cli(capsys, "solve", str(path))
     assert code == 1 and "unsolved" in out
     code, _, err = cli(capsys, "plan-sequence", str(path))
-    assert code == 1 and "no order of the tile moves" in err
+    assert code == 1 and "tile sets they reach were searched" in err
