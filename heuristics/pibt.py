@@ -136,7 +136,9 @@ class Bille(_Generator):
 
 
 class Classic(_Generator):
-    """PIBT with classic collisions (point robots): vertex and swap conflicts only."""
+    """PIBT with classic collisions (point robots): vertex and swap conflicts only, with
+    lacam3's *swap* emulation (Okumura, AAMAS 2024): where two robots must pass each other in a
+    corridor, one pulls the other along into a branch instead of both pushing head-on."""
 
     def generate(self, config: Poses, order: list[int], forced: tuple,
                  pinned: dict[int, frozenset]) -> tuple[tuple[int, ...], Poses] | None:
@@ -176,7 +178,10 @@ class Classic(_Generator):
         here = self.here
         ranked = sorted((dist[q], q in here and here[q] != i, self.rng.random(), k)
                         for k, (_, q, _) in enumerate(self.moves[i]))
-        for *_, k in ranked:
+        puller = self._swap_partner(i, self.moves[i][ranked[0][3]][1])
+        if puller is not None:
+            ranked.reverse()  # make way first: the partner follows into i's cell
+        for rank, (*_, k) in enumerate(ranked):
             q = self.moves[i][k][1]
             if q in self.next_at:
                 continue
@@ -191,7 +196,78 @@ class Classic(_Generator):
                     self.next_at[q] = j
                     self.choice[i] = None
                     continue
+            if rank == 0 and puller is not None:
+                self._pull(puller, i)
             return True
         self.choice[i] = 0  # nowhere to go: it stays (a forced move into its cell fails above)
         self.next_at.setdefault(self.config[i], i)
+        return False
+
+    # ---- the swap emulation ---------------------------------------------------------------------
+
+    def _pull(self, j: int, i: int) -> None:
+        """Robot ``j``, undecided, follows into the cell ``i`` leaves, if nobody takes it."""
+        v = self.config[i]
+        if self.choice[j] is not None or v in self.next_at or self.moves[i][self.choice[i]][1] == self.config[j]:
+            return
+        k = next((k for k, (_, q, _) in enumerate(self.moves[j]) if q == v), None)
+        if k is not None:
+            self._claim(j, k)
+
+    def _neighbours(self, v: int) -> list[int]:
+        return [q for _, q, _ in self.problem.moves(0, v) if q != v]
+
+    def _swap_partner(self, i: int, best: int) -> int | None:
+        """The robot that should pass ``i`` by being pulled along, if any: the robot on ``i``'s
+        best next cell when the two must pass each other and a branch ahead allows it; or (a
+        *clear* move, after push and swap) a neighbour that must pass ``i`` on its way to
+        ``best``."""
+        here, v = self.here, self.config[i]
+        j = here.get(best)
+        if (j is not None and j != i and self.choice[j] is None and self._must_pass(i, j, v, best)
+                and self._can_pass(best, v)):
+            return j
+        if best != v:
+            for u in self._neighbours(v):
+                k = here.get(u)
+                if (k is not None and self.config[k] != best and self._must_pass(k, i, v, best)
+                        and self._can_pass(best, v)):
+                    return k
+        return None
+
+    def _through(self, at: int, came: int) -> tuple[int, int | None]:
+        """How many ways lead on from ``at`` (not back to ``came``, nor into a dead end where a
+        robot rests at its goal), and one of them."""
+        n, way = 0, None
+        for u in self._neighbours(at):
+            k = self.here.get(u)
+            if u == came or (k is not None and len(self._neighbours(u)) == 1 and self.problem.at_goal(k, u)):
+                continue
+            n, way = n + 1, u
+        return n, way
+
+    def _must_pass(self, pusher: int, puller: int, v_pusher: int, v_puller: int) -> bool:
+        """Whether ``pusher`` (at ``v_pusher``) and ``puller`` (at ``v_puller``) want to pass each
+        other along a corridor with no room to step aside before the pusher's way improves."""
+        d_push, d_pull = self.problem.dist_lists[pusher], self.problem.dist_lists[puller]
+        a, b = v_pusher, v_puller
+        while d_push[b] < d_push[a]:
+            n, way = self._through(b, a)
+            if n >= 2:
+                return False  # room to step aside at b: no swap needed
+            if n == 0:
+                break
+            a, b = b, way
+        return d_pull[a] < d_pull[b] and (d_push[a] == 0 or d_push[b] < d_push[a])
+
+    def _can_pass(self, v_pusher: int, v_puller: int) -> bool:
+        """Whether pulling back from ``v_puller`` away from ``v_pusher`` reaches a branch."""
+        a, b, origin = v_pusher, v_puller, v_pusher
+        while b != origin:
+            n, way = self._through(b, a)
+            if n >= 2:
+                return True
+            if n == 0:
+                return False
+            a, b = b, way
         return False

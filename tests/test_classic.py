@@ -88,3 +88,13 @@ def test_planners_agree_with_brute_force_under_classic_rules():
 def test_methods_without_the_classic_rules_refuse_it(method):
     with pytest.raises(OptionError, match="classic collisions"):
         solve(classic(**CORRIDOR), method)
+
+
+def test_pibt_pulls_a_robot_along_to_pass_in_a_corridor():
+    # two robots meet head-on in a corridor with one side cell: lacam3's swap emulation lets the
+    # generator alone (one configuration per step, no constraint tried) bring both home
+    inst = make("TTTTTTT\n...T...", [{"at": [0, 0]}, {"at": [6, 0]}], moveset="point",
+                robot_goals=[[6, 0], [0, 0]], collisions="classic")
+    result = solve(inst, "lacam", improve=0.0)
+    assert result.status == "feasible" and validate(inst, result.schedule).valid
+    assert result.stats["nodes"] == result.metrics.makespan + 1
