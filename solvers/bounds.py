@@ -35,15 +35,19 @@ graph (:mod:`bille.instances.distances`): no schedule walks between two poses fa
     least ``dist(start, q) + 1``; its tile is set down later, at least one step later, and at
     least two if the robot picks and places ahead of itself (it must move first; see above).
 ``carrying (matching)``
-    A carry segment (pick at ``u``, place at ``v``, one robot) walks at least the relaxed distance
-    from a pose picking at ``u`` to one placing at ``v``. Chaining segments through intermediate
-    cells (relays, tiles set aside) gives the shortest-path closure ``d*(u, v)``. The multiset of
-    all segments of a schedule is a flow in which every cell of ``R`` sends one unit more than it
-    receives and every cell of ``F`` receives one more than it sends (the tiles carried at the
-    start add sources of their own). Decomposing it into paths, the paths leaving ``R`` end at
-    distinct cells of ``F``, so the walking while carrying is at least a minimum-cost assignment
-    of ``R`` to distinct cells of ``F`` under ``d*``. Those motions, the ``k`` picks and the
-    ``k + c`` places are different actions: ``ceil((assignment + 2k + c) / m)`` steps.
+    A carry segment (pick at ``u``, place at ``v``, one robot) takes a pick, a place, and at
+    least the relaxed distance from a pose picking at ``u`` to one placing at ``v`` in motions:
+    its *cost* in actions. Chaining segments through intermediate cells (relays, tiles set aside)
+    gives the shortest-path closure ``d*(u, v)``, in which every intermediate cell costs its
+    place and its pick again (a tile set down on one side of a cell and picked up from the
+    other moves two cells for those two actions, never for free). The multiset of all segments
+    of a schedule is a flow in which every cell of ``R`` sends one unit more than it receives
+    and every cell of ``F`` receives one more than it sends (the tiles carried at the start add
+    sources of their own). Decomposing it into paths and cycles, the paths leaving ``R`` end at
+    distinct cells of ``F``, each costing at least ``d*`` of its ends, and the paths from the
+    carried tiles end with a place each: the segments, which are different actions, cost at
+    least a minimum-cost assignment of ``R`` to distinct cells of ``F`` under ``d*``, plus ``c``:
+    ``ceil((assignment + c) / m)`` steps.
 
 Static infeasibility (``impossible``): a robot whose goal cell is unreachable; a cell of ``F``
 that no robot can ever place on (the bound above is infinite); a cell of ``R`` that no robot
@@ -65,10 +69,6 @@ from scipy.sparse.csgraph import dijkstra
 from bille.instances import Instance, PoseGraph
 from bille.instances.distances import INF, manipulates_ahead, relaxed_for
 from bille.instances.moveset import Kind
-
-# the weight of a pick or place edge in the transport graph: small enough that any number of
-# hops adds less than one step, positive because csgraph reads a stored zero as no edge
-_HOP = 1e-7
 
 
 @dataclass
@@ -118,7 +118,7 @@ def lower_bound(instance: Instance) -> Bounds:
         if carry is None:
             impossible.append("the tiles that must go cannot all be carried to cells that must be filled")
         else:
-            parts["carrying (matching)"] = -(-(carry + 2 * k + carried) // m)
+            parts["carrying (matching)"] = -(-(carry + carried) // m)
     lower = max([v for v in parts.values() if v is not None] + [0])
     return Bounds(lower, parts, impossible)
 
@@ -183,13 +183,13 @@ def _last_picks(world, from_start, ahead: dict) -> np.ndarray:
 
 
 def _transport(world, remove: np.ndarray, fill: np.ndarray) -> int | None:
-    """Least total walking while carrying: a minimum-cost assignment of the cells that must empty
-    to distinct cells that must fill under the closure distance ``d*`` of the module docstring.
-    None if no assignment of finite cost exists.
+    """Least cost in actions of carrying the tiles that must go: a minimum-cost assignment of the
+    cells that must empty to distinct cells that must fill under the closure ``d*`` of the module
+    docstring. None if no assignment of finite cost exists.
 
     ``d*`` is a shortest path in one graph: the relaxed poses of every robot type, plus a node
     per cell; a cell leads to the poses that pick at it and a pose to the cells it places at,
-    at a weight (``_HOP``) that no number of hops adds up to one step.
+    each edge one action (the pick, the place).
     """
     rm, fl = np.flatnonzero(remove), np.flatnonzero(fill)
     if not len(rm):
@@ -205,17 +205,16 @@ def _transport(world, remove: np.ndarray, fill: np.ndarray) -> int | None:
         cols += [e.col + base]
         weights += [e.data]
         p, c = _by_target(g, Kind.PICK, n)
-        rows, cols, weights = rows + [c], cols + [p + base], weights + [np.full(len(p), _HOP)]
+        rows, cols, weights = rows + [c], cols + [p + base], weights + [np.ones(len(p))]
         p, c = _by_target(g, Kind.PLACE, n)
-        rows, cols, weights = rows + [p + base], cols + [c], weights + [np.full(len(p), _HOP)]
+        rows, cols, weights = rows + [p + base], cols + [c], weights + [np.ones(len(p))]
         base += g.num_poses
     graph = csr_matrix((np.concatenate(weights), (np.concatenate(rows), np.concatenate(cols))), shape=(base, base))
     d = dijkstra(graph, indices=rm)[:, fl]
-    cost = np.where(np.isfinite(d), np.floor(d + 1e-3), np.inf)
-    if not np.isfinite(cost).any(axis=1).all():
+    if not np.isfinite(d).any(axis=1).all():
         return None
     big = 1e12
-    cost = np.where(np.isfinite(cost), cost, big)
+    cost = np.where(np.isfinite(d), np.round(d), big)
     r, c = linear_sum_assignment(cost)
     total = cost[r, c].sum()
     return None if total >= big else int(total)
