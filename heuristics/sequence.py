@@ -132,7 +132,7 @@ def check(instance: Instance, jobs: list[Job], *, given: bool = False) -> None:
                             f"(extra tiles at {extra}, missing at {missing})")
 
 
-def derive(instance: Instance, *, budget: int = 200, max_sets: int = 20_000,
+def derive(instance: Instance, *, budget: int = 200, max_sets: int = 2_000,
            deadline: float | None = None) -> list[Job]:
     """A valid sequence for ``instance`` (see the module docstring), or :class:`NoSequence`:
     ``budget`` dead ends for the first search, ``max_sets`` tile sets for the one with temporary
