@@ -33,6 +33,8 @@ class CpSatBackend:
             proto.constraints.add().at_most_one.literals.extend(_lits(group))
         self.values: list[int] | None = None
         self.stats = {"conflicts": 0, "solves": 0, "solve_s": 0.0}
+        self._solver: cp_model.CpSolver | None = None
+        self._stopped = False
 
     def add_clauses(self, clauses, deadline: float | None = None) -> None:
         constraints = self.cp.proto.constraints
@@ -56,6 +58,9 @@ class CpSatBackend:
             proto.solution_hint.vars.extend(list(range(len(hint))))
             proto.solution_hint.values.extend([int(x) for x in hint])
         solver = cp_model.CpSolver()
+        self._solver = solver
+        if self._stopped:
+            return UNKNOWN
         solver.parameters.num_workers = self.threads
         solver.parameters.random_seed = self.seed
         solver.parameters.cp_model_presolve = self.presolve if presolve is None else presolve
@@ -72,6 +77,12 @@ class CpSatBackend:
             return SAT if proven else UNKNOWN
         self.values = None
         return UNSAT if status == cp_model.INFEASIBLE else UNKNOWN
+
+    def stop(self) -> None:
+        """Stop a solve running in another thread (it returns ``unknown``), and any later one."""
+        self._stopped = True
+        if self._solver is not None:
+            self._solver.stop_search()
 
     def value(self, v: int) -> bool:
         return self.values[v - 1] > 0

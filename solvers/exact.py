@@ -22,6 +22,7 @@ search got).
 from __future__ import annotations
 
 import time
+from contextlib import contextmanager
 from typing import Callable
 
 import numpy as np
@@ -38,6 +39,7 @@ from bille.instances.schedule import Schedule
 
 from .bounds import Bounds, lower_bound
 from .incumbent import first_schedule, from_schedule
+from .lanes import Lanes
 
 SAT, UNSAT, UNKNOWN = "sat", "unsat", "unknown"
 
@@ -51,8 +53,8 @@ def plan_cpsat(instance: Instance, *, time_limit: float | None = None, threads: 
                presolve: bool = False,
                max_makespan: int | None = None, connectivity: str = "eager", minimize_travel: bool = True,
                prune: bool = True, prune_tiles: bool = True, single_carry: bool = False,
-               first_horizon: int | None = None, incumbent: Schedule | None = None, bounds: Bounds | None = None,
-               progress: Callable | None = None) -> Result:
+               first_horizon: int | None = None, incumbent: Schedule | None = None, travel_time: float | None = None,
+               bounds: Bounds | None = None, progress: Callable | None = None) -> Result:
     """Optimal makespan with OR-Tools CP-SAT.
 
     Parameters
@@ -67,6 +69,9 @@ def plan_cpsat(instance: Instance, *, time_limit: float | None = None, threads: 
     connectivity : ``eager`` (reachability layers; measured faster, see ``bille bench exact``)
         or ``lazy`` (cuts on demand).
     minimize_travel : then minimize tiles traveled at the optimal makespan.
+    travel_time : seconds for that minimization (default: half the time the makespan search took,
+        at least 1 s; within ``time_limit``); ``stats.tiles_traveled_optimal`` says whether it
+        was proved. ``stats.makespan_s`` is the time to the proved optimal makespan.
     prune : reachability and candidate-cell pruning (switch off to measure them).
     prune_tiles : the reachability in time with the tiles (:mod:`bille.encodings.reach`), part of
         ``prune``; off alone, the encoding as it was before it (``bille bench exact`` compares).
@@ -83,14 +88,14 @@ def plan_cpsat(instance: Instance, *, time_limit: float | None = None, threads: 
     if first_horizon is not None and first_horizon < 1:
         raise OptionError(f"cpsat: first_horizon must be at least 1, got {first_horizon}")
     return _Search("cpsat", instance, time_limit, max_makespan, connectivity, minimize_travel, (prune, prune_tiles),
-                   single_carry, threads=threads, seed=seed, presolve=presolve,
+                   single_carry, threads=threads, seed=seed, presolve=presolve, travel_time=travel_time,
                    first_horizon=first_horizon, incumbent=incumbent, bounds=bounds, progress=progress).run()
 
 
 def plan_sat(instance: Instance, *, time_limit: float | None = None, max_makespan: int | None = None,
              connectivity: str = "eager", minimize_travel: bool = True, prune: bool = True, prune_tiles: bool = True,
              single_carry: bool = False, solver: str = "cadical195", chunk: int = 8,
-             incumbent: Schedule | None = None, bounds: Bounds | None = None,
+             incumbent: Schedule | None = None, travel_time: float | None = None, bounds: Bounds | None = None,
              progress: Callable | None = None) -> Result:
     """Optimal makespan with a SAT solver of python-sat, incremental with assumptions.
 
@@ -100,11 +105,11 @@ def plan_sat(instance: Instance, *, time_limit: float | None = None, max_makespa
     if solver not in SOLVERS:
         raise OptionError(f"sat: unknown solver {solver!r} (expected one of: {', '.join(SOLVERS)})")
     return _Search("sat", instance, time_limit, max_makespan, connectivity, minimize_travel, (prune, prune_tiles),
-                   single_carry, solver=solver, chunk=chunk, incumbent=incumbent, bounds=bounds,
-                   progress=progress).run()
+                   single_carry, solver=solver, chunk=chunk, incumbent=incumbent, travel_time=travel_time,
+                   bounds=bounds, progress=progress).run()
 
 
-class _Search:
+class _Search(Lanes):
     def __init__(self, method, instance, time_limit, max_makespan, connectivity, minimize_travel, prune,
                  single_carry, **kw):
         if time_limit is not None and time_limit <= 0:
@@ -133,6 +138,21 @@ class _Search:
                       "connectivity": connectivity, "pruning": prune, "cuts": 0, "horizons": []}
         if single_carry:
             self.stats["single_carry"] = True
+
+    @contextmanager
+    def travel_time(self):
+        """The minimization of tiles traveled runs until its own, earlier deadline (see
+        ``travel_time`` in :func:`plan_cpsat`)."""
+        full = self.deadline
+        budget = self.kw.get("travel_time")
+        if budget is None:
+            budget = max(1.0, 0.5 * (time.perf_counter() - self.start))
+        end = time.perf_counter() + budget
+        self.deadline = end if full is None else min(full, end)
+        try:
+            yield
+        finally:
+            self.deadline = full
 
     def left(self) -> float | None:
         return None if self.deadline is None else self.deadline - time.perf_counter()
@@ -166,9 +186,9 @@ class _Search:
             self.incumbent, self.cap = found.ids, found.makespan
             self.stats["horizon_cap"] = found.makespan
 
-    def _report(self) -> None:
+    def _report(self, last: dict | None = None) -> None:
         if self.progress is not None:
-            last = self.stats["horizons"][-1]
+            last = self.stats["horizons"][-1] if last is None else last
             self.progress({"horizon": last["T"], "answer": last["answer"], "time_s": last["time_s"],
                            "elapsed": time.perf_counter() - self.start})
 
@@ -208,8 +228,10 @@ class _Search:
         """Horizons upward from the lower bound; from ``first_horizon`` if given, downward while
         satisfiable (a schedule of ``T`` steps also fits ``T + 1``: infeasible at ``T - 1``
         proves the ones below too)."""
-        lower = max(1, self.bounds.lower)
         first = self.kw.get("first_horizon")
+        if first is None and self.kw["threads"] >= 2:
+            return self._cpsat_lanes()
+        lower = max(1, self.bounds.lower)
         T = lower if first is None else min(max(lower, first), self.cap)
         found, proved_below = None, lower  # the smallest satisfiable horizon; no schedule below this
         while T <= self.cap:
@@ -245,6 +267,7 @@ class _Search:
         if found is None:
             return self._infeasible()
         model, backend = found
+        self.stats["makespan_s"] = round(time.perf_counter() - self.start, 3)
         ids = self._cpsat_travel(backend, model, self.incumbent)
         self.stats["solver"] = backend.stats
         return self.result("optimal", ids, lower=model.T)
@@ -254,23 +277,26 @@ class _Search:
         optimal. Tiles traveled are then minimized at ``k`` as after any other proof."""
         ids = self.incumbent
         self.stats["tiles_traveled_optimal"] = False
+        self.stats["makespan_s"] = round(time.perf_counter() - self.start, 3)
         if self.minimize_travel:
-            try:
-                model = build(self.instance, k, self.options, min_done=None if self.method == "cpsat" else k,
-                              deadline=self.deadline)
-                if self.method == "cpsat":
-                    backend = CpSatBackend(model, self.kw["threads"], self.kw["seed"], deadline=self.deadline,
-                                           presolve=self.kw["presolve"])
-                    ids = self._cpsat_travel(backend, model, ids)
-                else:
-                    backend = SatBackend(model, self.kw["solver"])
-                    try:
-                        if self._sat_solve(backend, model, [model.done[k]]) == SAT:
-                            ids = self._sat_travel(backend, model, k, decode(model, self.instance, backend.value)[:, :k])
-                    finally:
-                        backend.delete()
-            except OutOfTime:
-                pass
+            with self.travel_time():
+                try:
+                    model = build(self.instance, k, self.options, min_done=None if self.method == "cpsat" else k,
+                                  deadline=self.deadline)
+                    if self.method == "cpsat":
+                        backend = CpSatBackend(model, self.kw["threads"], self.kw["seed"], deadline=self.deadline,
+                                               presolve=self.kw["presolve"])
+                        ids = self._cpsat_travel(backend, model, ids)
+                    else:
+                        backend = SatBackend(model, self.kw["solver"])
+                        try:
+                            if self._sat_solve(backend, model, [model.done[k]]) == SAT:
+                                ids = self._sat_travel(backend, model, k,
+                                                       decode(model, self.instance, backend.value)[:, :k])
+                        finally:
+                            backend.delete()
+                except OutOfTime:
+                    pass
         return self.result("optimal", ids, lower=k)
 
     def _cpsat_travel(self, backend, model, ids):
@@ -278,15 +304,16 @@ class _Search:
         if not self.minimize_travel:
             return ids
         hint = None if backend.values is None else list(backend.values)  # a solution to start from
-        while True:
-            status = backend.solve(self.left(), minimize=model.motion, hint=hint, presolve=True)
-            if backend.values is None:
-                return ids  # timed out before any better solution: keep the first one
-            if not self._check(backend, model):
-                continue
-            ids = decode(model, self.instance, backend.value)
-            self.stats["tiles_traveled_optimal"] = status == SAT
-            return ids
+        with self.travel_time():
+            while True:
+                status = backend.solve(self.left(), minimize=model.motion, hint=hint, presolve=True)
+                if backend.values is None:
+                    return ids  # timed out before any better solution: keep the first one
+                if not self._check(backend, model):
+                    continue
+                ids = decode(model, self.instance, backend.value)
+                self.stats["tiles_traveled_optimal"] = status == SAT
+                return ids
 
     # ---- SAT: incremental over a range of horizons ----------------------------------------------
 
@@ -312,6 +339,7 @@ class _Search:
                     if status == UNKNOWN:
                         return self.timeout(k)
                     if status == SAT:
+                        self.stats["makespan_s"] = round(time.perf_counter() - self.start, 3)
                         ids = decode(model, self.instance, backend.value)[:, :k]
                         ids = self._sat_travel(backend, model, k, ids)
                         self.stats["solver"] = backend.stats
@@ -335,14 +363,15 @@ class _Search:
         steps = {v: t for (_, t), group in model.y.items() for v, _, _ in group}
         motion = [v for v in model.motion if steps[v] <= k]
         best = sum(backend.value(v) for v in motion)
-        while best > 0:
-            status = self._sat_solve(backend, model, [model.done[k], backend.at_most(motion, best - 1)])
-            if status == UNKNOWN:
-                return ids
-            if status == UNSAT:
-                break
-            ids = decode(model, self.instance, backend.value)[:, :k]
-            best = sum(backend.value(v) for v in motion)
+        with self.travel_time():
+            while best > 0:
+                status = self._sat_solve(backend, model, [model.done[k], backend.at_most(motion, best - 1)])
+                if status == UNKNOWN:
+                    return ids
+                if status == UNSAT:
+                    break
+                ids = decode(model, self.instance, backend.value)[:, :k]
+                best = sum(backend.value(v) for v in motion)
         self.stats["tiles_traveled_optimal"] = True
         return ids
 

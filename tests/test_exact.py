@@ -42,11 +42,13 @@ def optimum():
 
 @pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n in ("handover", "point-pass") else n
                                   for n in TINY])
-@pytest.mark.parametrize("method", ["cpsat", "sat"])
+@pytest.mark.parametrize("method", ["cpsat", "cpsat-lanes", "sat"])
 @pytest.mark.parametrize("connectivity", ["lazy", "eager", "cuts"])
 def test_exact_makespan_equals_breadth_first_search(name, method, connectivity, optimum):
+    # cpsat-lanes: two workers, two horizons side by side
     inst = TINY[name]()
-    result = solve(inst, method, connectivity=connectivity, time_limit=120)
+    threads = {"threads": 2} if method == "cpsat-lanes" else {}
+    result = solve(inst, method.split("-")[0], connectivity=connectivity, time_limit=120, **threads)
     assert result.status == "optimal", result.stats
     assert validate(inst, result.schedule).valid
     assert result.metrics.makespan == result.lower_bound == optimum(name)
@@ -112,21 +114,23 @@ def test_no_schedule_within_the_horizon_cap_is_no_proof(method):
     # below but does not prove that no longer schedule exists
     inst = make("TTT\n...", [{"front": [1, 0], "back": [0, 0]}], moveset="S5", robot_goals=[[0, 0]])
     assert solve(inst, "bfs").status == "infeasible"
-    result = solve(inst, method, max_makespan=8, time_limit=120)
-    assert result.status == "unsolved" and "horizon cap 8" in result.stats["failure"]
-    assert result.lower_bound == 9 and result.schedule is None
+    for threads in ({}, {"threads": 2}) if method == "cpsat" else ({},):
+        result = solve(inst, method, max_makespan=8, time_limit=120, **threads)
+        assert result.status == "unsolved" and "horizon cap 8" in result.stats["failure"]
+        assert result.lower_bound == 9 and result.schedule is None
 
 
 @pytest.mark.parametrize("method", ["cpsat", "sat"])
 def test_a_timeout_returns_the_bound_not_a_crash(method):
     inst = load_instance(bundled_path("bridge-2"))
-    result = solve(inst, method, time_limit=1.0)
-    assert result.status in ("timeout", "feasible", "optimal")
-    assert result.lower_bound >= lower_bound(inst).lower
-    if result.status == "timeout":
-        assert result.schedule is None
-    else:
-        assert validate(inst, result.schedule).valid and result.lower_bound <= result.metrics.makespan
+    for threads in ({}, {"threads": 2}) if method == "cpsat" else ({},):
+        result = solve(inst, method, time_limit=1.0, **threads)
+        assert result.status in ("timeout", "feasible", "optimal")
+        assert result.lower_bound >= lower_bound(inst).lower
+        if result.status == "timeout":
+            assert result.schedule is None
+        else:
+            assert validate(inst, result.schedule).valid and result.lower_bound <= result.metrics.makespan
 
 
 @pytest.mark.parametrize("method", ["cpsat", "sat"])
