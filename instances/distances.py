@@ -56,6 +56,10 @@ class Relaxed:
         """Steps from ``pose`` to every pose."""
         return self._run([pose], reverse=False)
 
+    def from_poses(self, poses) -> np.ndarray:
+        """Steps from the nearest of ``poses`` to every pose."""
+        return self._run(poses, reverse=False)
+
     def to_poses(self, poses) -> np.ndarray:
         """Steps from every pose to the nearest of ``poses``."""
         return self._run(poses, reverse=True)

@@ -49,6 +49,11 @@ graph (:mod:`bille.instances.distances`): no schedule walks between two poses fa
     least a minimum-cost assignment of ``R`` to distinct cells of ``F`` under ``d*``, plus ``c``:
     ``ceil((assignment + c) / m)`` steps.
 
+``routing (LP)``
+    The carries together with the walks back for more tiles, as a flow of robots through pick
+    and place events with tiles conserved cell by cell: a linear program whose minimum bounds
+    the actions of every schedule (:mod:`.routing`, whose docstring proves it).
+
 Static infeasibility (``impossible``): a robot whose goal cell is unreachable; a cell of ``F``
 that no robot can ever place on (the bound above is infinite); a cell of ``R`` that no robot
 can ever pick at; cells of ``R`` that cannot all be assigned to cells of ``F`` at a finite
@@ -69,6 +74,8 @@ from scipy.sparse.csgraph import dijkstra
 from bille.instances import Instance, PoseGraph
 from bille.instances.distances import INF, manipulates_ahead, relaxed_for
 from bille.instances.moveset import Kind
+
+from .routing import routing_bound
 
 
 @dataclass
@@ -119,6 +126,7 @@ def lower_bound(instance: Instance) -> Bounds:
             impossible.append("the tiles that must go cannot all be carried to cells that must be filled")
         else:
             parts["carrying (matching)"] = -(-(carry + carried) // m)
+            parts["routing (LP)"] = routing_bound(instance, _by_target)
     lower = max([v for v in parts.values() if v is not None] + [0])
     return Bounds(lower, parts, impossible)
 

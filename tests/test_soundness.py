@@ -30,7 +30,7 @@ def reference(inst):
 
 def check_bounds(instances) -> dict:
     """Every bound part against the reference; returns counts of what was decided."""
-    counts = {"optimal": 0, "infeasible": 0, "undecided": 0}
+    counts = {"optimal": 0, "infeasible": 0, "undecided": 0, "routing binds": 0}
     for inst in instances:
         ref, bounds = reference(inst), lower_bound(inst)
         if ref.status == "optimal":
@@ -39,6 +39,8 @@ def check_bounds(instances) -> dict:
             assert not bounds.impossible, (inst.name, bounds.impossible)
             for part, value in bounds.parts.items():
                 assert value is None or value <= ref.lower_bound, (inst.name, part, value, ref.lower_bound)
+            others = [v for k, v in bounds.parts.items() if k != "routing (LP)" and v is not None]
+            counts["routing binds"] += (bounds.parts.get("routing (LP)") or 0) > max(others, default=0)
         elif ref.status == "infeasible":
             counts["infeasible"] += 1
         else:
@@ -159,6 +161,22 @@ def test_a_relay_found_by_the_random_search():
         assert result.status == "optimal" and result.metrics.makespan == 3
 
 
+def test_walking_back_for_the_second_tile_counts():
+    # tiny-82 of tinyworlds: the robot carries a tile and must fill (0, 2) and (2, 2) and empty
+    # (3, 1), so after its first place it walks back for the tile at (3, 1); only the routing
+    # bound counts that walk, and it meets the optimum
+    inst = make("""
+        TTTT
+        TTTT
+        .T..""", [{"at": [3, 0], "carrying": True}], goal="""
+        TTTT
+        TTT.
+        TTT.""", moveset="point")
+    bounds = lower_bound(inst)
+    assert bounds.parts["routing (LP)"] == reference(inst).lower_bound == 7
+    assert max(v for k, v in bounds.parts.items() if k != "routing (LP)") <= 5
+
+
 # ---- random tiny instances ----------------------------------------------------------------------
 
 QUICK = tiny_instances(30)
@@ -179,6 +197,7 @@ def test_exact_back_ends_claim_the_optimum():
 def test_bounds_never_exceed_the_optimum_on_many():
     counts = check_bounds(MANY)
     assert counts["optimal"] >= 80 and counts["infeasible"] >= 40, counts
+    assert counts["routing binds"] >= 10, counts  # the LP is put to the test, not only the others
 
 
 @pytest.mark.slow

@@ -1,0 +1,149 @@
+"""A lower bound on the makespan from the robots' routes: carrying *and* walking back for more
+(a part of :mod:`.bounds`, "routing (LP)").
+
+**The theorem.** Take any valid schedule of makespan ``T``. Each robot's actions split into
+*carries* (from a pick to the next place: the pick, the motions, the place) and *walks* (from
+its start or a place to its next pick or its end: motions only). A carry from a pose facing cell
+``c`` to one facing ``d`` takes at least ``D(c, d) + 2`` actions, a walk between poses at least
+their distance ``D``, both in the relaxed pose graph (obstacles only; the distances of
+:mod:`bille.instances.distances`, which no schedule beats). Every robot takes one action per
+step, so all robots together take at most ``m T`` actions: ``T >= cost / m`` for the total cost
+of the carries and walks of the schedule.
+
+The carries and walks form a flow of robots through *event* nodes, a pick node ``K_c`` and a
+place node ``P_c`` per cell: each robot leaves its start (for a pick node, or a place node if it
+carries a tile at the start, or straight for its end), enters a place node after each pick node
+(a carry) and a pick node or its end after each place node (a walk); no robot ends carrying.
+Tiles are conserved cell by cell: a cell ends with a tile iff it started with one plus the
+places on it minus the picks from it, so ``places(c) - picks(c) = goal(c) - start(c)``, with
+relays, tiles set aside and tiles that stay but move all counted. The schedule's flow is an
+integer solution of that linear program (robot supply 1 per start, conservation at every event
+node, the tile balance per cell) of cost at most ``m T``; the program's minimum over all real
+solutions (a linear relaxation: event order, collisions and connectivity are left out, and
+robots of different movesets share the distances of the nearest one) is at most the
+schedule's cost. So ``T >= ceil(LP / m)``. An infeasible program would mean no flow exists,
+which the carrying bound's assignment already says of these instances (it is not used as a
+proof here).
+
+Distances: ``D(c, d)`` is the least relaxed distance from a pose that picks at ``c`` to one that
+places at ``d`` (over the robot types), and so on for each kind of arc; the end of a walk costs a
+robot's distance to its goal cell (the least over the robots, since robots share the flow).
+
+The program has two arcs per pair of cells, so it is built only for instances of at most
+:data:`MAX_CELLS` cells that some robot can pick or place on.
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy.optimize import linprog
+from scipy.sparse import coo_matrix
+
+from bille.instances import Instance
+from bille.instances.distances import INF, relaxed_for
+from bille.instances.moveset import Kind
+
+MAX_CELLS = 400
+
+
+def routing_bound(instance: Instance, by_target) -> int | None:
+    """``ceil(LP / m)`` of the module docstring, or None when the program is not built (too
+    many cells) or not solved. ``by_target(graph, kind, n)`` lists ``(pose, cell)`` pairs."""
+    world, state = instance.world, instance.start_state
+    n = world.width * world.height
+    graphs = list({id(g): g for g in world.graphs}.values())
+    faces = {Kind.PICK: {}, Kind.PLACE: {}}  # kind -> graph id -> cell -> poses
+    for g in graphs:
+        for kind in faces:
+            poses, cells = by_target(g, kind, n)
+            per = faces[kind].setdefault(id(g), {})
+            for p, c in zip(poses.tolist(), cells.tolist()):
+                per.setdefault(c, []).append(p)
+    cells = sorted(set().union(*(per.keys() for kind in faces.values() for per in kind.values())))
+    if not cells or len(cells) > MAX_CELLS:
+        return None
+    k = len(cells)
+    start, goal = instance.start.tiles, instance.goal_tiles
+    balance = np.array([int(goal[c]) - int(start[c]) for c in cells], dtype=float)
+    outside = (goal & ~start).copy()
+    outside[cells] = False
+    if outside.any() or (start & ~goal & ~_mask(n, cells)).any():
+        return None  # a cell to change that nobody can reach: the static proofs say so
+
+    def from_sets(g, kind_from, kind_to):
+        """``[i, j]``: least distance from a ``kind_from`` pose of ``cells[i]`` to a ``kind_to``
+        pose of ``cells[j]`` for robots of ``g``."""
+        relaxed = relaxed_for(g)
+        out = np.full((k, k), INF, dtype=np.int64)
+        to = faces[kind_to][id(g)]
+        for i, c in enumerate(cells):
+            src = faces[kind_from][id(g)].get(c)
+            if not src:
+                continue
+            d = relaxed.from_poses(src)
+            for j, e in enumerate(cells):
+                dest = to.get(e)
+                if dest:
+                    out[i, j] = d[dest].min()
+        return out
+
+    carry = np.minimum.reduce([from_sets(g, Kind.PICK, Kind.PLACE) for g in graphs])
+    walk = np.minimum.reduce([from_sets(g, Kind.PLACE, Kind.PICK) for g in graphs])
+    m = instance.num_robots
+    goal_cells = instance.goal_cells
+    ends = np.full(k, INF, dtype=np.int64)  # a walk from a place at cells[j] to some robot's end
+    robot_rows = []
+    for r, (g, p) in enumerate(zip(world.graphs, state.poses)):
+        relaxed = relaxed_for(g)
+        here = relaxed.from_pose(p)
+        to_goal = relaxed.to_front(goal_cells[r]) if goal_cells[r] >= 0 else np.zeros(g.num_poses, np.int64)
+        first = Kind.PLACE if state.carrying[r] else Kind.PICK
+        row = np.array([here[faces[first][id(g)][c]].min() if c in faces[first][id(g)] else INF for c in cells])
+        robot_rows.append((row, int(to_goal[p]), bool(state.carrying[r])))
+        place = faces[Kind.PLACE][id(g)]
+        ends = np.minimum(ends, [to_goal[place[c]].min() if c in place else INF for c in cells])
+    return _solve(k, m, balance, carry, walk, ends, robot_rows)
+
+
+def _mask(n: int, cells: list[int]) -> np.ndarray:
+    out = np.zeros(n, bool)
+    out[cells] = True
+    return out
+
+
+def _solve(k, m, balance, carry, walk, ends, robot_rows) -> int | None:
+    """Build and solve the program: variables are arc flows; rows are the robot supplies, the
+    conservation at every pick and place node, and the tile balance per cell."""
+    costs, rows, cols, vals = [], [], [], []
+    n_rows = m + 2 * k + k  # supplies, K nodes, P nodes, balances
+    K = lambda j: m + j  # noqa: E731  conservation row of pick node j: inflow - outflow = 0
+    P = lambda j: m + k + j  # noqa: E731  conservation row of place node j
+    B = lambda j: m + 2 * k + j  # noqa: E731  tile balance row of cell j: into P - into K = balance
+
+    def arc(cost, entries):
+        var = len(costs)
+        costs.append(cost)
+        for row, v in entries:
+            rows.append(row)
+            cols.append(var)
+            vals.append(v)
+
+    for r, (first, alone, carrying) in enumerate(robot_rows):
+        for j in np.flatnonzero(first < INF).tolist():
+            if carrying:  # its first event is a place
+                arc(float(first[j] + 1), [(r, 1.0), (P(j), 1.0), (B(j), 1.0)])
+            else:
+                arc(float(first[j] + 1), [(r, 1.0), (K(j), 1.0), (B(j), -1.0)])
+        if not carrying and alone < INF:
+            arc(float(alone), [(r, 1.0)])  # it never picks
+    for i, j in zip(*np.nonzero(carry < INF)):
+        arc(float(carry[i, j] + 1), [(K(i), -1.0), (P(j), 1.0), (B(j), 1.0)])  # the place
+    for j, i in zip(*np.nonzero(walk < INF)):
+        arc(float(walk[j, i] + 1), [(P(j), -1.0), (K(i), 1.0), (B(i), -1.0)])  # the pick
+    for j in np.flatnonzero(ends < INF).tolist():
+        arc(float(ends[j]), [(P(j), -1.0)])
+    a = coo_matrix((vals, (rows, cols)), shape=(n_rows, len(costs))).tocsr()
+    b = np.concatenate([np.ones(m), np.zeros(2 * k), balance])
+    got = linprog(np.array(costs), A_eq=a, b_eq=b, bounds=(0, None), method="highs")
+    if got.status != 0:
+        return None
+    return int(np.ceil(got.fun / m - 1e-6))
