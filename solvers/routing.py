@@ -42,7 +42,7 @@ from bille.instances import Instance
 from bille.instances.distances import INF, relaxed_for
 from bille.instances.moveset import Kind
 
-MAX_CELLS = 400
+MAX_CELLS = 200
 
 
 def routing_bound(instance: Instance, by_target) -> int | None:
@@ -69,21 +69,18 @@ def routing_bound(instance: Instance, by_target) -> int | None:
     if outside.any() or (start & ~goal & ~_mask(n, cells)).any():
         return None  # a cell to change that nobody can reach: the static proofs say so
 
+    index = {c: j for j, c in enumerate(cells)}
+
     def from_sets(g, kind_from, kind_to):
         """``[i, j]``: least distance from a ``kind_from`` pose of ``cells[i]`` to a ``kind_to``
         pose of ``cells[j]`` for robots of ``g``."""
         relaxed = relaxed_for(g)
         out = np.full((k, k), INF, dtype=np.int64)
         to = faces[kind_to][id(g)]
-        for i, c in enumerate(cells):
-            src = faces[kind_from][id(g)].get(c)
-            if not src:
-                continue
-            d = relaxed.from_poses(src)
-            for j, e in enumerate(cells):
-                dest = to.get(e)
-                if dest:
-                    out[i, j] = d[dest].min()
+        dest = np.array([p for c in to for p in to[c]], dtype=np.int64)
+        column = np.array([index[c] for c in to for _ in to[c]], dtype=np.int64)
+        for c, src in faces[kind_from][id(g)].items():
+            np.minimum.at(out[index[c]], column, relaxed.from_poses(src)[dest])
         return out
 
     carry = np.minimum.reduce([from_sets(g, Kind.PICK, Kind.PLACE) for g in graphs])
@@ -111,39 +108,45 @@ def _mask(n: int, cells: list[int]) -> np.ndarray:
 
 
 def _solve(k, m, balance, carry, walk, ends, robot_rows) -> int | None:
-    """Build and solve the program: variables are arc flows; rows are the robot supplies, the
-    conservation at every pick and place node, and the tile balance per cell."""
-    costs, rows, cols, vals = [], [], [], []
-    n_rows = m + 2 * k + k  # supplies, K nodes, P nodes, balances
-    K = lambda j: m + j  # noqa: E731  conservation row of pick node j: inflow - outflow = 0
-    P = lambda j: m + k + j  # noqa: E731  conservation row of place node j
-    B = lambda j: m + 2 * k + j  # noqa: E731  tile balance row of cell j: into P - into K = balance
+    """Build and solve the program: variables are arc flows; rows are the robot supplies (0 ..
+    m-1), the conservation at the pick nodes (``K``) and the place nodes (``P``: inflow minus
+    outflow is 0), and the tile balance per cell (``B``: arcs into its place node minus arcs
+    into its pick node)."""
+    K, P, B = m, m + k, m + 2 * k  # first row of each block
+    costs, entries = [], []  # per block of arcs: costs, and (rows, values) per entry
 
-    def arc(cost, entries):
-        var = len(costs)
-        costs.append(cost)
-        for row, v in entries:
-            rows.append(row)
-            cols.append(var)
-            vals.append(v)
+    def arcs(cost, *rows_values):
+        costs.append(np.asarray(cost, dtype=float))
+        entries.append(rows_values)
 
     for r, (first, alone, carrying) in enumerate(robot_rows):
-        for j in np.flatnonzero(first < INF).tolist():
-            if carrying:  # its first event is a place
-                arc(float(first[j] + 1), [(r, 1.0), (P(j), 1.0), (B(j), 1.0)])
-            else:
-                arc(float(first[j] + 1), [(r, 1.0), (K(j), 1.0), (B(j), -1.0)])
-        if not carrying and alone < INF:
-            arc(float(alone), [(r, 1.0)])  # it never picks
-    for i, j in zip(*np.nonzero(carry < INF)):
-        arc(float(carry[i, j] + 1), [(K(i), -1.0), (P(j), 1.0), (B(j), 1.0)])  # the place
-    for j, i in zip(*np.nonzero(walk < INF)):
-        arc(float(walk[j, i] + 1), [(P(j), -1.0), (K(i), 1.0), (B(i), -1.0)])  # the pick
-    for j in np.flatnonzero(ends < INF).tolist():
-        arc(float(ends[j]), [(P(j), -1.0)])
-    a = coo_matrix((vals, (rows, cols)), shape=(n_rows, len(costs))).tocsr()
+        j = np.flatnonzero(first < INF)
+        one = np.ones(len(j))
+        if carrying:  # its first event is a place
+            arcs(first[j] + 1, (np.full(len(j), r), one), (P + j, one), (B + j, one))
+        else:
+            arcs(first[j] + 1, (np.full(len(j), r), one), (K + j, one), (B + j, -one))
+            if alone < INF:
+                arcs([alone], (np.array([r]), np.ones(1)))  # it never picks
+    i, j = np.nonzero(carry < INF)  # a carry: the pick was paid on the way in, the place here
+    one = np.ones(len(i))
+    arcs(carry[i, j] + 1, (K + i, -one), (P + j, one), (B + j, one))
+    j, i = np.nonzero(walk < INF)  # a walk, and the pick it ends with
+    one = np.ones(len(i))
+    arcs(walk[j, i] + 1, (P + j, -one), (K + i, one), (B + i, -one))
+    j = np.flatnonzero(ends < INF)
+    arcs(ends[j], (P + j, -np.ones(len(j))))
+    rows, cols, vals, base = [], [], [], 0
+    for cost, block in zip(costs, entries):
+        for r, v in block:
+            rows.append(r)
+            cols.append(base + np.arange(len(cost)))
+            vals.append(v)
+        base += len(cost)
+    a = coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                   shape=(m + 3 * k, base)).tocsr()
     b = np.concatenate([np.ones(m), np.zeros(2 * k), balance])
-    got = linprog(np.array(costs), A_eq=a, b_eq=b, bounds=(0, None), method="highs")
+    got = linprog(np.concatenate(costs), A_eq=a, b_eq=b, bounds=(0, None), method="highs")
     if got.status != 0:
         return None
     return int(np.ceil(got.fun / m - 1e-6))
