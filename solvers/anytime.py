@@ -9,7 +9,8 @@ bound in turn, until they meet (``optimal``) or the time runs out (``feasible``,
    - **Raising the bound**: the exact makespan search of :mod:`.exact` from the static lower
      bound up, one model per horizon (its pruning is tightest there). An infeasible horizon ``k``
      proves that no schedule is shorter than ``k + 1``; a satisfiable one is an optimal schedule.
-     An undecided horizon keeps its solver, with what it learned, for the next slice.
+     One CP-SAT worker decides each horizon (``bound_solver``; a python-sat solver instead keeps
+     what it learned on an undecided horizon for the next slice).
    - **Shortening the schedule**: large neighbourhood search over time windows (after MAPF-LNS,
      Li et al., IJCAI 2021). A window ``[a, b]`` of the schedule is re-solved exactly with the
      time-expanded model: from the state at ``a`` (tiles, poses, loads) to exactly the state at
@@ -38,6 +39,7 @@ import numpy as np
 
 from bille.encodings.cnf import SOLVERS, SatBackend
 from bille.encodings.connectivity import connectivity_cuts
+from bille.encodings.cpsat import CpSatBackend
 from bille.encodings.model import Options, OutOfTime, build
 from bille.encodings.solution import decode, tiles_at
 from bille.instances import Instance, OptionError, instance_at
@@ -57,8 +59,9 @@ except ValueError:
 
 
 def plan(instance: Instance, *, time_limit: float = 60.0, window: int = 8, slice: float = 2.0,
-         parallel: bool = True, solver: str = "cadical195", incumbent: Schedule | None = None,
-         bounds: Bounds | None = None, progress: Callable | None = None) -> Result:
+         parallel: bool = True, solver: str = "cadical195", bound_solver: str = "cpsat",
+         incumbent: Schedule | None = None, bounds: Bounds | None = None,
+         progress: Callable | None = None) -> Result:
     """Anytime certified solving (module docstring).
 
     Parameters
@@ -70,21 +73,29 @@ def plan(instance: Instance, *, time_limit: float = 60.0, window: int = 8, slice
         turn (default 2).
     parallel : raise the bound in a child process, on a second core, while the parent searches
         windows (default; where the platform cannot fork, the two take turns).
-    solver : the python-sat solver of both searches (default ``cadical195``).
+    solver : the python-sat solver of the neighbourhood search (default ``cadical195``).
+    bound_solver : the bound search's solver: ``cpsat`` (the default: one CP-SAT worker, measured
+        3 to 4 times faster than CaDiCaL on these models, bridge-2 at T = 14 to 16: 2.5 / 3.6 /
+        7.7 s against 11 / 19 / 29 s) or a python-sat solver name.
     incumbent : a schedule to start from instead of the heuristics' (must be valid).
     progress : called with ``{"lower": ..., "best": ..., "elapsed": ...}`` whenever either
         number changes (the command line draws a live line from it).
     """
     if solver not in SOLVERS:
         raise OptionError(f"anytime: unknown solver {solver!r} (expected one of: {', '.join(SOLVERS)})")
+    if bound_solver != "cpsat" and bound_solver not in SOLVERS:
+        raise OptionError(f"anytime: unknown bound_solver {bound_solver!r} (expected cpsat or one of: "
+                          f"{', '.join(SOLVERS)})")
     if window < 2 or slice <= 0:
         raise OptionError(f"anytime: window must be at least 2 and slice positive, got {window} and {slice}")
-    return _Anytime(instance, time_limit, window, slice, parallel, solver, incumbent, bounds, progress).run()
+    return _Anytime(instance, time_limit, window, slice, parallel, (solver, bound_solver), incumbent, bounds,
+                    progress).run()
 
 
 class _Anytime:
-    def __init__(self, instance, time_limit, window, slice_s, parallel, solver, incumbent, bounds, progress):
-        self.instance, self.window, self.slice, self.solver = instance, window, slice_s, solver
+    def __init__(self, instance, time_limit, window, slice_s, parallel, solvers, incumbent, bounds, progress):
+        self.instance, self.window, self.slice = instance, window, slice_s
+        self.solver, self.bound_solver = solvers
         self.parallel = parallel
         self.start = time.perf_counter()
         self.end = self.start + time_limit
@@ -209,8 +220,12 @@ class _Rise:
                     self.model = build(inst, self.k, Options(), deadline=run.end)
                 except OutOfTime:
                     return
-                self.backend = SatBackend(self.model, run.solver)
-            status = _solve(self.backend, self.model, inst, [], until)
+                self.backend = (CpSatBackend(self.model, 1, presolve=False) if run.bound_solver == "cpsat"
+                                else SatBackend(self.model, run.bound_solver))
+            if isinstance(self.backend, CpSatBackend):  # eager connectivity: no cuts to add
+                status = self.backend.solve(max(0.01, until - time.perf_counter()))
+            else:
+                status = _solve(self.backend, self.model, inst, [], until)
             if status == UNKNOWN:
                 return
             if status == SAT:  # every horizon below k is infeasible: optimal
@@ -231,7 +246,7 @@ class _Rise:
         self.step(until)
 
     def close(self) -> None:
-        if self.backend is not None:
+        if isinstance(self.backend, SatBackend):
             self.backend.delete()
         self.model = self.backend = None
 

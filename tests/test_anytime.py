@@ -33,13 +33,15 @@ def test_tiny_instances_are_solvable():
     assert len(SOLVABLE) >= 5
 
 
+@pytest.mark.parametrize("bound_solver", ["cpsat", "cadical195"])
 @pytest.mark.parametrize("parallel", [False, True])
 @pytest.mark.parametrize("k", range(3))
-def test_anytime_proves_the_brute_force_optimum(k, parallel):
+def test_anytime_proves_the_brute_force_optimum(k, parallel, bound_solver):
     inst = SOLVABLE[k + (3 if parallel else 0)]
     optimum = OPTIMA[inst]
     seen = []
-    result = solve(inst, "anytime", time_limit=60, parallel=parallel, progress=seen.append)
+    result = solve(inst, "anytime", time_limit=60, parallel=parallel, bound_solver=bound_solver,
+                   progress=seen.append)
     assert result.status == "optimal", result.stats
     assert validate(inst, result.schedule).valid
     assert result.metrics.makespan == result.lower_bound == optimum
