@@ -20,6 +20,7 @@ from .spacetime import reservation_step
 
 MSTAR_EXPANSIONS = 100_000  # per M* replan: a joint plan that needs more ends the run
 LACAM_NODES = 2_000  # per LaCAM* plan of a replan (a goal set that needs more is relaxed)
+PARKING = 3  # LaCAM* motion: an idle robot keeps its feet this far (Manhattan) from the work at hand
 
 
 class Motion:
@@ -37,6 +38,8 @@ class Motion:
             return walk.facing_distances(leg.cell)
         if self.goal_cells[i] >= 0:
             return walk.distances(self.goal_cells[i])
+        if self.motion == "lacam":
+            return self._parking(walk, i)
         needed = self._pending_picks()
         feet = self.world.graphs[i].feet
         if needed.intersection(feet[self.state.poses[i]].tolist()):  # off the tiles still to be picked
@@ -45,6 +48,32 @@ class Motion:
 
             return walk.distances_to(("clear", frozenset(needed)), clear)
         return None
+
+    def _parking(self, walk, i: int) -> np.ndarray | None:
+        """LaCAM* motion: an idle robot heads for the nearest pose whose feet keep at least
+        :data:`PARKING` cells (Manhattan) from the work at hand (the cells of the robots' legs and
+        of the next jobs to hand out), so that it does not stand where a pick, a place or the way
+        to one needs it; None (free) if there is no such pose."""
+        w = self.instance.width
+        soon = self.jobs[self.next_job:self.next_job + len(self.legs)]
+        work = {leg.cell for legs in self.legs for leg in legs} | {c for j in soon for c in (j.pick, j.place)
+                                                                   if c is not None}
+        if not work:
+            return None
+        key = ("park", frozenset(work))
+
+        def sources():
+            cells = np.array(sorted(work))
+            feet = walk.graph.feet
+            near = np.zeros(walk.graph.feet.shape[0], bool)
+            for k in range(feet.shape[1]):
+                f = np.maximum(feet[:, k], 0)
+                d = np.abs(f[:, None] % w - cells[None, :] % w) + np.abs(f[:, None] // w - cells[None, :] // w)
+                near |= (d < PARKING).any(axis=1)
+            return np.flatnonzero(walk.standing & ~near)
+
+        dist = walk.distances_to(key, sources)
+        return None if dist[self.state.poses[i]] >= UNREACHABLE else dist
 
     def _pick_towards(self, walk, i: int, pick: int, place: int) -> np.ndarray:
         """Distances to the poses facing ``pick`` from which the tile, once picked, can be
