@@ -20,7 +20,7 @@ from .spacetime import reservation_step
 
 MSTAR_EXPANSIONS = 100_000  # per M* replan: a joint plan that needs more ends the run
 LACAM_NODES = 2_000  # per LaCAM* plan of a replan (a goal set that needs more is relaxed)
-PARKING = 3  # LaCAM* motion: an idle robot keeps its feet this far (Manhattan) from the work at hand
+PARKING = 5  # LaCAM* motion: an idle robot keeps its feet this far (Manhattan) from the work at hand
 
 
 class Motion:

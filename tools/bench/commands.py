@@ -183,10 +183,12 @@ def bench_view(size: int, robots: int, steps: int, seed: int) -> int:
               help="Also run this many random reconfiguration instances per size (10-50 tiles moved, 2-10 robots).")
 @click.option("--exact-limit", type=click.FloatRange(min=0), default=0.0, show_default=True,
               help="Seconds of CP-SAT per random instance for the gap to the optimum (0: skip).")
+@click.option("--motion", type=click.Choice(["temporal-astar", "lacam"]), default="temporal-astar", show_default=True,
+              help="The random instances' method: the paper's loop (Temporal A*) or lacam (LaCAM* motion layer).")
 @click.option("--out", type=click.Path(file_okay=False), default="bench-out", show_default=True,
               help="Folder for load-transfer.csv and load-transfer.png.")
 def bench_load_transfer(maps: str, horizon: int, d_tr: int, time_limit: float, random_runs: int, exact_limit: float,
-                        out: str) -> int:
+                        motion: str, out: str) -> int:
     """The paper's load-transfer experiment: each map with and without load transfer (Temporal A*,
     epsilon 1), the percentage decrease in time steps and tiles traveled, and a bar plot."""
     from .transfer import plot, random_report, run_maps, table, write_csv
@@ -201,7 +203,7 @@ def bench_load_transfer(maps: str, horizon: int, d_tr: int, time_limit: float, r
     plot(rows, folder / "load-transfer.png")
     click.echo(f"wrote {folder / 'load-transfer.csv'} and {folder / 'load-transfer.png'}")
     if random_runs:
-        for line in random_report(random_runs, horizon, d_tr, time_limit, exact_limit):
+        for line in random_report(random_runs, horizon, d_tr, time_limit, exact_limit, motion):
             click.echo(line)  # one line per size as soon as it is measured
     return EXIT_OK
 

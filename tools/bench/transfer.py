@@ -27,7 +27,10 @@ FIELDS = ("map", "robots", "tasks", "status_off", "steps_off", "traveled_off", "
 SIZES = ((10, 2), (20, 4), (30, 6), (50, 10))  # (tiles moved, robots) of the random instances
 
 
-def _run(inst: Instance, transfer: bool, horizon: int, d_tr: int, time_limit: float):
+def _run(inst: Instance, transfer: bool, horizon: int, d_tr: int, time_limit: float,
+         motion: str = "temporal-astar"):
+    if motion == "lacam":
+        return solve(inst, "lacam", load_transfer=transfer, d_tr=d_tr, time_limit=time_limit)
     return solve(inst, "temporal-astar", epsilon=1.0, horizon=horizon, load_transfer=transfer, d_tr=d_tr,
                  time_limit=time_limit)
 
@@ -149,7 +152,8 @@ def plot(rows: list[dict], path: Path) -> None:
         plt.close(fig)
 
 
-def random_report(runs: int, horizon: int, d_tr: int, time_limit: float, exact_limit: float):
+def random_report(runs: int, horizon: int, d_tr: int, time_limit: float, exact_limit: float,
+                  motion: str = "temporal-astar"):
     """Success rate and mean makespan with and without load transfer on random instances, and
     the gap to the optimum where CP-SAT proves one within ``exact_limit`` seconds: yields the
     lines of a table, one per size as soon as it is measured."""
@@ -159,7 +163,8 @@ def random_report(runs: int, horizon: int, d_tr: int, time_limit: float, exact_l
     from bille.instances import Task
     from bille.instances.generators.random import random_reconfiguration
 
-    yield f"random reconfiguration instances ({runs} per size; S7; Temporal A*, H {horizon}, d_tr {d_tr})"
+    method = f"Temporal A*, H {horizon}" if motion == "temporal-astar" else "lacam (LaCAM* motion layer)"
+    yield f"random reconfiguration instances ({runs} per size; S7; {method}, d_tr {d_tr})"
     yield ("(a derived sequence; where the derivation gives up, the generator's own moves as tasks, "
            "counted under 'tasks')")
     yield (f"{'moved':>5} {'robots':>6} | {'solved off':>10} {'on':>4} | {'mean steps off':>14} {'on':>6} | "
@@ -182,7 +187,7 @@ def random_report(runs: int, horizon: int, d_tr: int, time_limit: float, exact_l
                 given += 1
             results = {}
             for transfer in (False, True):
-                results[transfer] = res = _run(inst, transfer, horizon, d_tr, time_limit)
+                results[transfer] = res = _run(inst, transfer, horizon, d_tr, time_limit, motion)
                 if res.metrics is not None:
                     solved[transfer].append(res.metrics.makespan)
             if exact_limit > 0:
