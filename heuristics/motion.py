@@ -11,6 +11,7 @@ import time
 
 import numpy as np
 
+from bille.instances.grid import articulation_points
 from bille.instances.moveset import Kind
 from bille.instances.walking import UNREACHABLE, walk_for
 
@@ -52,8 +53,11 @@ class Motion:
     def _parking(self, walk, i: int) -> np.ndarray | None:
         """LaCAM* motion: an idle robot heads for the nearest pose whose feet keep at least
         :data:`PARKING` cells (Manhattan) from the work at hand (the cells of the robots' legs and
-        of the next jobs to hand out), so that it does not stand where a pick, a place or the way
-        to one needs it; None (free) if there is no such pose."""
+        of the next jobs to hand out) and off the structure's articulation points (a narrow
+        passage), so that it does not stand where a pick, a place or the way to one needs it;
+        None (free) if there is no such pose. (Keeping off the robots' shortest walks as well
+        was measured and dropped: the parking poses then change every step, and the robots go
+        round in circles.)"""
         w = self.instance.width
         soon = self.jobs[self.next_job:self.next_job + len(self.legs)]
         work = {leg.cell for legs in self.legs for leg in legs} | {c for j in soon for c in (j.pick, j.place)
@@ -65,11 +69,12 @@ class Motion:
         def sources():
             cells = np.array(sorted(work))
             feet = walk.graph.feet
+            cut = articulation_points(self.state.tiles, w, self.instance.height)
             near = np.zeros(walk.graph.feet.shape[0], bool)
             for k in range(feet.shape[1]):
                 f = np.maximum(feet[:, k], 0)
                 d = np.abs(f[:, None] % w - cells[None, :] % w) + np.abs(f[:, None] // w - cells[None, :] // w)
-                near |= (d < PARKING).any(axis=1)
+                near |= (d < PARKING).any(axis=1) | cut[f]
             return np.flatnonzero(walk.standing & ~near)
 
         dist = walk.distances_to(key, sources)
