@@ -76,7 +76,8 @@ class Lanes:
                                 stopped.add(U)
                                 b.stop()
         finally:
-            for _, _, backend in running.values():
+            for T, _, backend in running.values():
+                stopped.add(T)
                 backend.stop()
             while running:  # a stop may land before its solve began: repeat it until all are done
                 done, _ = wait(running, timeout=0.05)
@@ -85,6 +86,8 @@ class Lanes:
                 for _, _, backend in running.values():
                     backend.stop()
             pool.shutdown(wait=True)
+            for row in self.stats["horizons"]:  # the horizons left undecided when the search ended
+                row.setdefault("answer", "stopped" if row["T"] in stopped else UNKNOWN)
         model, backend = found[proved_below]
         self.incumbent = decode(model, self.instance, backend.value)
         self.stats["makespan_s"] = round(time.perf_counter() - self.start, 3)

@@ -49,6 +49,7 @@ def test_exact_makespan_equals_breadth_first_search(name, method, connectivity, 
     inst = TINY[name]()
     threads = {"threads": 2} if method == "cpsat-lanes" else {}
     result = solve(inst, method.split("-")[0], connectivity=connectivity, time_limit=120, **threads)
+    assert all(h["answer"] in ("sat", "unsat", "stopped") for h in result.stats["horizons"])
     assert result.status == "optimal", result.stats
     assert validate(inst, result.schedule).valid
     assert result.metrics.makespan == result.lower_bound == optimum(name)
