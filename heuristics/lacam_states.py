@@ -31,7 +31,7 @@ import random
 
 import numpy as np
 
-from bille.instances import Instance
+from bille.instances import Instance, OptionError
 from bille.instances.distances import relaxed_for
 from bille.instances.grid import articulation_points
 from bille.instances.moveset import Kind
@@ -55,6 +55,8 @@ def plan(instance: Instance, *, time_limit: float | None = None, improve: float 
     (the space is exhausted: no schedule exists), ``timeout``, or ``unsolved`` at the node cap
     (``max_nodes``, at most what :data:`MEMORY` holds: about 30,000 states of four robots).
     """
+    if instance.collisions == "classic":  # the generator's cell ownership is rule 3's
+        raise OptionError(f"{method}: the search over whole states plans under the Bill-E rule only")
     rng = random.Random(seed)
     space = StateSpace(instance, rng)
     per_state = instance.width * instance.height + ROBOT_BYTES * max(1, instance.num_robots)
