@@ -50,6 +50,7 @@ from bille.instances.moveset import Kind
 from bille.instances.distances import INF, relaxed_for
 
 from .connectivity import eager_connectivity
+from .ends import add_end_constraints, end_poses, end_roles
 from .reach import reach_in_time
 
 CONNECTIVITY = ("eager", "lazy", "cuts")
@@ -93,6 +94,7 @@ class Model:
     motion: list[int] = field(default_factory=list)  # y variables of motion actions
     true: int = 0
     candidates: np.ndarray | None = None  # cells that may ever hold a tile
+    ends: dict = field(default_factory=dict)  # robot -> [(robot whose end state, x literal)] (:mod:`.ends`)
 
     @property
     def num_vars(self) -> int:
@@ -114,21 +116,23 @@ class Model:
 
 
 def build(instance: Instance, T: int, options: Options = Options(), min_done: int | None = None,
-          deadline: float | None = None, end=None) -> Model:
+          deadline: float | None = None, end=None, swap: bool = False) -> Model:
     """The model of ``instance`` with horizon ``T``. With ``min_done``, ``done[k]`` literals for
     ``k = min_done .. T`` are added for an incremental makespan search by assumptions. Raises
     :class:`OutOfTime` if building passes ``deadline`` (a ``time.perf_counter()`` value).
 
     With ``end`` (a :class:`~bille.instances.State`), every robot ends at ``T`` in exactly its pose
     and load in ``end`` (robot goal cells are then ignored); the tiles at ``T`` are the goal
-    tiles as always. A window of a schedule re-solved this way fits back in its place."""
-    return _Builder(instance, T, options, deadline, end).build(min_done)
+    tiles as always. A window of a schedule re-solved this way fits back in its place. With
+    ``swap``, interchangeable robots may end in one another's end states (:mod:`.ends`)."""
+    return _Builder(instance, T, options, deadline, end, swap).build(min_done)
 
 
 class _Builder:
     def __init__(self, instance: Instance, T: int, options: Options, deadline: float | None = None,
-                 end=None) -> None:
+                 end=None, swap: bool = False) -> None:
         self.deadline, self.end = deadline, end
+        self.roles = end_roles(instance, swap and end is not None)
         if options.connectivity not in CONNECTIVITY:
             raise ValueError(f"connectivity must be one of {CONNECTIVITY}")
         self.inst, self.T, self.opt = instance, T, options
@@ -152,6 +156,8 @@ class _Builder:
         self._candidate_cells()
         self._variables()
         self._actions()
+        if self.end is not None:
+            add_end_constraints(self)
         self._dynamics()
         self._collisions()
         if self.opt.connectivity == "eager":
@@ -165,7 +171,7 @@ class _Builder:
     def _reachable_poses(self) -> None:
         """R[i][t]: bool mask of the poses robot i may have at time t."""
         T, goals = self.T, self.inst.goal_cells
-        self.timed = reach_in_time(self.inst, T, self.end) if self.opt.prune_tiles else None
+        self.timed = reach_in_time(self.inst, T, self.end, self.roles) if self.opt.prune_tiles else None
         if self.end is not None:
             goals = [-1] * len(goals)
         self.R = []
@@ -187,7 +193,7 @@ class _Builder:
                 if t == T and goals[i] >= 0:
                     mask &= g.feet[:, 0] == goals[i]
                 if t == T and self.end is not None:
-                    mask &= np.arange(g.num_poses) == self.end.poses[i]
+                    mask &= np.isin(np.arange(g.num_poses), end_poses(self.end, self.roles[i]))
                 if self.timed is not None:
                     mask &= self.timed.poses[i][t]
                 masks.append(mask)
@@ -267,7 +273,7 @@ class _Builder:
             for t in range(T + 1):
                 if t == 0:
                     self.carry[(i, t)] = self.const(self.state.carrying[i])
-                elif t == T:
+                elif t == T and (self.end is None or len({self.end.carrying[j] for j in self.roles[i]}) == 1):
                     self.carry[(i, t)] = self.const(self.end is not None and bool(self.end.carrying[i]))
                 elif self.timed is not None and not self.timed.carry[i, t]:
                     self.carry[(i, t)] = self.const(False)

@@ -60,12 +60,13 @@ def _standing(g, tiles: np.ndarray) -> np.ndarray:
     return g.valid & tiles[np.maximum(g.feet, 0)].all(axis=1)
 
 
-def reach_in_time(instance: Instance, T: int, end=None) -> Reach:
+def reach_in_time(instance: Instance, T: int, end=None, roles=None) -> Reach:
     """Forward and backward reachability of the instance over ``T`` steps, intersected. With
     ``end`` (a :class:`~bille.instances.State`), the poses and loads at ``T`` are those of ``end``
-    instead of the goal's (the tiles at ``T`` are the goal tiles either way)."""
+    instead of the goal's (the tiles at ``T`` are the goal tiles either way); with ``roles``
+    (per robot, the robots whose end state it may take), any of theirs."""
     fwd = _forward(instance, T)
-    bwd = _backward(instance, T, end)
+    bwd = _backward(instance, T, end, roles or [(i,) for i in range(instance.num_robots)])
     poses = [[f & b for f, b in zip(fi, bi)] for fi, bi in zip(fwd.poses, bwd.poses)]
     return Reach(poses, fwd.tiles & bwd.tiles, fwd.carry & bwd.carry)
 
@@ -98,7 +99,7 @@ def _forward(instance: Instance, T: int) -> Reach:
     return Reach(poses, tiles, carry)
 
 
-def _backward(instance: Instance, T: int, end) -> Reach:
+def _backward(instance: Instance, T: int, end, roles) -> Reach:
     graphs, goals = instance.world.graphs, instance.goal_cells
     n, cells = len(graphs), instance.width * instance.height
     tiles = np.zeros((T + 1, cells), bool)
@@ -108,8 +109,8 @@ def _backward(instance: Instance, T: int, end) -> Reach:
     for i, g in enumerate(graphs):
         last = _standing(g, tiles[T])
         if end is not None:
-            last &= np.arange(g.num_poses) == end.poses[i]
-            carry[i, T] = end.carrying[i]
+            last &= np.isin(np.arange(g.num_poses), [end.poses[j] for j in roles[i]])
+            carry[i, T] = any(end.carrying[j] for j in roles[i])
         elif goals[i] >= 0:
             last &= g.feet[:, 0] == goals[i]
         poses[i][T] = last

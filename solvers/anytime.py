@@ -40,6 +40,7 @@ import numpy as np
 from bille.encodings.cnf import SOLVERS, SatBackend
 from bille.encodings.connectivity import connectivity_cuts
 from bille.encodings.cpsat import CpSatBackend
+from bille.encodings.ends import roles_taken
 from bille.encodings.model import Options, OutOfTime, build
 from bille.encodings.solution import decode, tiles_at
 from bille.instances import Instance, OptionError, instance_at
@@ -59,7 +60,7 @@ except ValueError:
 
 
 def plan(instance: Instance, *, time_limit: float = 60.0, window: int = 8, slice: float = 2.0,
-         parallel: bool = True, solver: str = "cadical195", bound_solver: str = "cpsat",
+         parallel: bool = True, solver: str = "cadical195", bound_solver: str = "cpsat", swap: bool = True,
          incumbent: Schedule | None = None, bounds: Bounds | None = None,
          progress: Callable | None = None) -> Result:
     """Anytime certified solving (module docstring).
@@ -77,6 +78,8 @@ def plan(instance: Instance, *, time_limit: float = 60.0, window: int = 8, slice
     bound_solver : the bound search's solver: ``cpsat`` (the default: one CP-SAT worker, measured
         3 to 4 times faster than CaDiCaL on these models, bridge-2 at T = 14 to 16: 2.5 / 3.6 /
         7.7 s against 11 / 19 / 29 s) or a python-sat solver name.
+    swap : a window may end with interchangeable robots (one moveset, no goal cell) in one
+        another's end states, the rest of the schedule permuted to match (default true).
     incumbent : a schedule to start from instead of the heuristics' (must be valid).
     progress : called with ``{"lower": ..., "best": ..., "elapsed": ...}`` whenever either
         number changes (the command line draws a live line from it).
@@ -88,13 +91,14 @@ def plan(instance: Instance, *, time_limit: float = 60.0, window: int = 8, slice
                           f"{', '.join(SOLVERS)})")
     if window < 2 or slice <= 0:
         raise OptionError(f"anytime: window must be at least 2 and slice positive, got {window} and {slice}")
-    return _Anytime(instance, time_limit, window, slice, parallel, (solver, bound_solver), incumbent, bounds,
+    return _Anytime(instance, time_limit, window, slice, parallel, (solver, bound_solver), swap, incumbent, bounds,
                     progress).run()
 
 
 class _Anytime:
-    def __init__(self, instance, time_limit, window, slice_s, parallel, solvers, incumbent, bounds, progress):
-        self.instance, self.window, self.slice = instance, window, slice_s
+    def __init__(self, instance, time_limit, window, slice_s, parallel, solvers, swap, incumbent, bounds,
+                 progress):
+        self.instance, self.window, self.slice, self.swap = instance, window, slice_s, swap
         self.solver, self.bound_solver = solvers
         self.parallel = parallel
         self.start = time.perf_counter()
@@ -105,7 +109,7 @@ class _Anytime:
         self.given = incumbent
         self.best: Incumbent | None = None
         self.stats = {"improvements": [], "lower_bounds": [],
-                      "windows": {"tried": 0, "shortened": 0, "not_shorter": 0, "undecided": 0},
+                      "windows": {"tried": 0, "shortened": 0, "swapped": 0, "not_shorter": 0, "undecided": 0},
                       "bound_s": 0.0, "search_s": 0.0}
 
     def elapsed(self) -> float:
@@ -365,25 +369,28 @@ class _Windows:
         if L < 1:
             return UNSAT
         try:
-            model = build(sub, L, Options(), min_done=1, deadline=until, end=end)
+            model = build(sub, L, Options(), min_done=1, deadline=until, end=end, swap=run.swap)
         except OutOfTime:
             counts["undecided"] += 1
             return UNKNOWN
         backend = SatBackend(model, run.solver)
+        m = inst.num_robots
         try:
             status = _solve(backend, model, sub, [model.done[L]], until)
             if status != SAT:
                 counts["undecided" if status == UNKNOWN else "not_shorter"] += 1
                 return status
-            k, part = L, decode(model, sub, backend.value)
+            k, part, roles = L, decode(model, sub, backend.value), roles_taken(model, backend.value, m)
             while k > 1 and _solve(backend, model, sub, [model.done[k - 1]], until) == SAT:
-                k, part = k - 1, decode(model, sub, backend.value)
+                k, part, roles = k - 1, decode(model, sub, backend.value), roles_taken(model, backend.value, m)
         finally:
             backend.delete()
-        ids = np.concatenate([best.ids[:, :a], part[:, :k], best.ids[:, b:]], axis=1)
+        # robot i goes on with the rest of the schedule of the robot whose end state it took
+        ids = np.concatenate([best.ids[:, :a], part[:, :k], best.ids[roles, b:]], axis=1)
         found = from_schedule(inst, Schedule.from_ids(inst, ids), "anytime")
         if found is not None and run.improve(found):
             counts["shortened"] += 1
+            counts["swapped"] += roles != list(range(m))
         return SAT
 
 

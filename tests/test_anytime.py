@@ -12,6 +12,7 @@ from bille.instances.moveset import Kind
 from bille.instances.schedule import Schedule, bind, save_schedule
 from bille.solvers import anytime, solve, validate
 from bille.solvers.bfs import plan as bfs
+from helpers import make
 from tinyworlds import tiny_instances
 
 OPTIMA = {}
@@ -121,3 +122,31 @@ def test_gap_uses_a_bound_from_the_metadata():
     inst = dataclasses.replace(inst, meta={"optimum": optimum})
     rows = run([inst], [Config("temporal-astar", "temporal-astar")], 60)
     assert rows[0]["lower_bound"] == optimum and rows[0]["certified_gap_percent"] == rows[0]["gap_percent"]
+
+
+def test_a_window_may_end_with_interchangeable_robots_in_each_others_places():
+    # two point robots on a one-row strip cannot pass each other: a window that must end with
+    # them exchanged is infeasible, unless they may take each other's roles (then waiting does)
+    from bille.encodings.cnf import SatBackend
+    from bille.encodings.ends import roles_taken
+    from bille.encodings.model import Options, build
+
+    inst = make("TTTT", [{"at": [0, 0]}, {"at": [3, 0]}], moveset="point")
+    start = inst.start_state
+    exchanged = dataclasses.replace(start, poses=start.poses[::-1])
+    for swap, answer in ((False, False), (True, True)):
+        model = build(inst, 3, Options(), end=exchanged, swap=swap)
+        backend = SatBackend(model)
+        try:
+            assert backend.solve([], None) == ("sat" if answer else "unsat")
+            if answer:
+                assert roles_taken(model, backend.value, 2) == [1, 0]
+        finally:
+            backend.delete()
+    with_goals = make("TTTT", [{"at": [0, 0]}, {"at": [3, 0]}], moveset="point", robot_goals=[[0, 0], None])
+    model = build(with_goals, 3, Options(), end=exchanged, swap=True)  # a robot with a goal keeps its role
+    backend = SatBackend(model)
+    try:
+        assert backend.solve([], None) == "unsat"
+    finally:
+        backend.delete()
