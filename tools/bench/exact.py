@@ -39,7 +39,7 @@ def _time(result) -> str:
 
 
 def optimum_table(time_limit: float, threads: int, echo) -> None:
-    echo(f"1. time to the proved optimum (CP-SAT {threads} threads, SAT CaDiCaL; limit {time_limit:g} s per run)")
+    echo(f"1. time to the proved optimum (CP-SAT {threads} threads, SAT Glucose 4.2; limit {time_limit:g} s per run)")
     echo(f"   {'map':<12} {'robots':>6} {'tiles':>5} {'moved':>5} {'T*':>4} {'vars':>8} {'clauses':>9} "
          f"{'cpsat [s]':>10} {'sat [s]':>9} {'sat/cpsat':>9}")
     for name in MAPS:
