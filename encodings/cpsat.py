@@ -44,15 +44,16 @@ class CpSatBackend:
                 raise OutOfTime
 
     def solve(self, time_limit: float | None, minimize: list[int] | None = None,
-              hint: list[int] | None = None, presolve: bool | None = None) -> str:
+              hint: list[int] | None = None, presolve: bool | None = None, maximize: bool = False) -> str:
         """``sat`` (proved optimal when minimizing), ``unsat`` or ``unknown``; a solution found
-        without proof of its minimum also returns ``unknown``, with :attr:`values` set.
+        without proof of its optimum also returns ``unknown``, with :attr:`values` set.
+        ``minimize`` lists the variables whose count is minimized (``maximize``: maximized).
         ``presolve`` overrides the backend's setting for this call."""
         proto = self.cp.proto
         if minimize is not None:
             proto.clear_objective()
             proto.objective.vars.extend([v - 1 for v in minimize])
-            proto.objective.coeffs.extend([1] * len(minimize))
+            proto.objective.coeffs.extend([-1 if maximize else 1] * len(minimize))
         if hint is not None:
             proto.clear_solution_hint()
             proto.solution_hint.vars.extend(list(range(len(hint))))

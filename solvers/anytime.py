@@ -74,8 +74,9 @@ def plan(instance: Instance, *, time_limit: float = 60.0, window: int = 8, slice
         turn (default 2).
     parallel : raise the bound in a child process, on a second core, while the parent searches
         windows (default; where the platform cannot fork, the two take turns).
-    solver : the python-sat solver of the neighbourhood search (default ``glucose42``: it
-        decides more windows in the same time than ``cadical195`` on the lt maps).
+    solver : the neighbourhood search's solver: a python-sat name (default ``glucose42``: it
+        decides more windows in the same time than ``cadical195`` on the lt maps) or ``cpsat``
+        (one worker, the part's length minimized in one solve; measured no better).
     bound_solver : the bound search's solver: ``cpsat`` (the default: one CP-SAT worker, measured
         3 to 4 times faster than CaDiCaL on these models, bridge-2 at T = 14 to 16: 2.5 / 3.6 /
         7.7 s against 11 / 19 / 29 s) or a python-sat solver name.
@@ -85,8 +86,8 @@ def plan(instance: Instance, *, time_limit: float = 60.0, window: int = 8, slice
     progress : called with ``{"lower": ..., "best": ..., "elapsed": ...}`` whenever either
         number changes (the command line draws a live line from it).
     """
-    if solver not in SOLVERS:
-        raise OptionError(f"anytime: unknown solver {solver!r} (expected one of: {', '.join(SOLVERS)})")
+    if solver != "cpsat" and solver not in SOLVERS:
+        raise OptionError(f"anytime: unknown solver {solver!r} (expected cpsat or one of: {', '.join(SOLVERS)})")
     if bound_solver != "cpsat" and bound_solver not in SOLVERS:
         raise OptionError(f"anytime: unknown bound_solver {bound_solver!r} (expected cpsat or one of: "
                           f"{', '.join(SOLVERS)})")
@@ -374,18 +375,25 @@ class _Windows:
         except OutOfTime:
             counts["undecided"] += 1
             return UNKNOWN
-        backend = SatBackend(model, run.solver)
         m = inst.num_robots
-        try:
-            status = _solve(backend, model, sub, [model.done[L]], until)
-            if status != SAT:
-                counts["undecided" if status == UNKNOWN else "not_shorter"] += 1
-                return status
-            k, part, roles = L, decode(model, sub, backend.value), roles_taken(model, backend.value, m)
-            while k > 1 and _solve(backend, model, sub, [model.done[k - 1]], until) == SAT:
-                k, part, roles = k - 1, decode(model, sub, backend.value), roles_taken(model, backend.value, m)
-        finally:
-            backend.delete()
+        if run.solver == "cpsat":
+            found = _shortest_cpsat(model, sub, L, until)
+            if isinstance(found, str):
+                counts["undecided" if found == UNKNOWN else "not_shorter"] += 1
+                return found
+            k, part, roles = found
+        else:
+            backend = SatBackend(model, run.solver)
+            try:
+                status = _solve(backend, model, sub, [model.done[L]], until)
+                if status != SAT:
+                    counts["undecided" if status == UNKNOWN else "not_shorter"] += 1
+                    return status
+                k, part, roles = L, decode(model, sub, backend.value), roles_taken(model, backend.value, m)
+                while k > 1 and _solve(backend, model, sub, [model.done[k - 1]], until) == SAT:
+                    k, part, roles = k - 1, decode(model, sub, backend.value), roles_taken(model, backend.value, m)
+            finally:
+                backend.delete()
         # robot i goes on with the rest of the schedule of the robot whose end state it took
         ids = np.concatenate([best.ids[:, :a], part[:, :k], best.ids[roles, b:]], axis=1)
         found = from_schedule(inst, Schedule.from_ids(inst, ids), "anytime")
@@ -393,6 +401,20 @@ class _Windows:
             counts["shortened"] += 1
             counts["swapped"] += roles != list(range(m))
         return SAT
+
+
+def _shortest_cpsat(model, sub: Instance, L: int, until: float):
+    """The window's shortest part with one CP-SAT worker: ``done[L]`` required, as many steps
+    ``done`` as can be (``done[k]``: every robot waits from step ``k`` on). Returns ``(k, part,
+    roles)`` for the best part found (proved shortest or not), else ``unsat`` or ``unknown``."""
+    backend = CpSatBackend(model, 1, presolve=False)
+    backend.add_clauses([[model.done[L]]])
+    status = backend.solve(max(0.01, until - time.perf_counter()), minimize=[model.done[k] for k in range(1, L + 1)],
+                           maximize=True)
+    if backend.values is None:
+        return status
+    k = next(k for k in range(1, L + 1) if backend.value(model.done[k]))
+    return k, decode(model, sub, backend.value), roles_taken(model, backend.value, sub.num_robots)
 
 
 def run_states(instance: Instance, ids: np.ndarray):

@@ -59,13 +59,14 @@ def _padded(inst, schedule, waits):
 
 
 @pytest.mark.slow
-def test_the_windows_shorten_a_padded_schedule_to_the_optimum(monkeypatch):
+@pytest.mark.parametrize("solver", ["glucose42", "cpsat"])
+def test_the_windows_shorten_a_padded_schedule_to_the_optimum(monkeypatch, solver):
     monkeypatch.setattr(anytime._Rise, "step", lambda self, until: None)  # no bound search: windows only
     inst = load_instance(bundled_path("corridor-2"))
     optimal = solve(inst, "sat", minimize_travel=False)
     padded = _padded(inst, optimal.schedule, 5)
     assert validate(inst, padded).metrics.makespan == optimal.metrics.makespan + 5
-    result = solve(inst, "anytime", time_limit=6, parallel=False, incumbent=padded)
+    result = solve(inst, "anytime", time_limit=6, parallel=False, incumbent=padded, solver=solver)
     assert result.status in ("optimal", "feasible")
     assert validate(inst, result.schedule).valid
     assert result.metrics.makespan == optimal.metrics.makespan
