@@ -134,12 +134,14 @@ def bench_planners(time_limit: float, jobs: int | None, maps: str, movesets: str
 @bench.command("exact")
 @click.option("--time-limit", type=click.FloatRange(min=1), default=120.0, show_default=True, help="Seconds per run.")
 @click.option("--threads", type=click.IntRange(min=1), default=2, show_default=True, help="CP-SAT workers.")
-@click.option("--only", type=click.Choice(["optimum", "connectivity", "pruning", "presolve", "before-after"]),
+@click.option("--only", type=click.Choice(["optimum", "connectivity", "pruning", "presolve", "before-after",
+                                          "sat-solver"]),
               multiple=True, help="Run only these sections (repeatable; before-after is long: every bundled "
-                                  "instance, twice per back end).")
+                                  "instance, twice per back end; sat-solver: five SAT configurations).")
 def bench_exact(time_limit: float, threads: int, only) -> int:
     """Exact solvers: time to optimum per map, eager vs lazy connectivity, pruning, presolve;
-    with --only before-after, the encoding before and after the reachability with the tiles."""
+    with --only before-after, the encoding before and after the reachability with the tiles;
+    with --only sat-solver, the SAT back end's solvers and horizons per model."""
     from .exact import report
 
     report(time_limit, threads, only or ("optimum", "connectivity", "pruning", "presolve"), echo=click.echo)

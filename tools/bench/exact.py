@@ -9,6 +9,8 @@
    reachability in time with the tiles (``prune_tiles=false``, the encoding before it) against
    the current one: model size at the last horizon, each horizon's answer and time, and the time
    to the proved optimum (makespan only).
+6. The SAT back end's solver and horizons per model (``chunk``): CaDiCaL with 8 (the default
+   before) against Glucose and MiniSat, one horizon per model (the default now) and 8.
 
 Every run gets the same time limit; unfinished runs show their status instead of a time.
 """
@@ -108,11 +110,30 @@ def before_after_table(time_limit: float, threads: int, echo) -> None:
                 echo(f"   {'':<12} {method:<6} {'before/after':<7} {before.time_s / after.time_s:.2f}")
 
 
+SAT_CONFIGS = (("cadical195", 8), ("cadical195", 1), ("glucose42", 8), ("glucose42", 1), ("minisat22", 1))
+
+
+def sat_solver_table(time_limit: float, threads: int, echo) -> None:
+    echo(f"6. the SAT back end: solver and horizons per model (chunk); seconds to the proved optimal makespan "
+         f"(limit {time_limit:g} s per run; before = cadical195, 8)")
+    head = " ".join(f"{f'{s},{c}':>14}" for s, c in SAT_CONFIGS)
+    echo(f"   {'map':<12} {head} {'before/default':>15}")
+    for name in ("compare-5", "point-4", "corridor-2", "compare-6", "lt-4", "reconfig-30"):
+        cells, times = [], {}
+        for solver, chunk in SAT_CONFIGS:
+            _, result, _ = _run(name, "sat", time_limit, solver=solver, chunk=chunk, minimize_travel=False)
+            times[solver, chunk] = result.time_s if result.status == "optimal" else None
+            cells.append(f"{result.time_s:>14.2f}" if result.status == "optimal" else f"{result.status:>14}")
+        before, default = times[SAT_CONFIGS[0]], times["glucose42", 1]
+        ratio = f"{before / default:.2f}" if before and default else "-"
+        echo(f"   {name:<12} {' '.join(cells)} {ratio:>15}")
+
+
 def report(time_limit: float = 120.0, threads: int = 2, sections=("optimum", "connectivity", "pruning", "presolve"),
            echo=print) -> None:
     start = time.perf_counter()
     tables = {"optimum": optimum_table, "connectivity": connectivity_table, "pruning": pruning_table,
-              "presolve": presolve_table, "before-after": before_after_table}
+              "presolve": presolve_table, "before-after": before_after_table, "sat-solver": sat_solver_table}
     for key in sections:
         tables[key](time_limit, threads, echo)
         echo("")
