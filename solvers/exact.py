@@ -106,8 +106,9 @@ def plan_sat(instance: Instance, *, time_limit: float | None = None, max_makespa
     The defaults were chosen by measurement (seconds to the proved optimal makespan on 2 cores;
     docs/exact.md has the table): a model built for one horizon is pruned to what that horizon
     allows, and that outweighs keeping learned clauses across horizons in a larger model;
-    Glucose 4.2 beats CaDiCaL 1.9.5 on these models. reconfig-30: 21 s against 55 s for CaDiCaL
-    with 8 horizons per model; lt-4: 4.1 s against 19 s; compare-5: 0.3 s against 2.5 s.
+    Glucose 4.2 beats CaDiCaL 1.9.5 on these models (``bille bench exact --only sat-solver``).
+    reconfig-30: 18 s against 51 s for CaDiCaL with 8 horizons per model; lt-4: 4.8 s against
+    24 s; compare-5: 0.4 s against 2.7 s.
     """
     if solver not in SOLVERS:
         raise OptionError(f"sat: unknown solver {solver!r} (expected one of: {', '.join(SOLVERS)})")
