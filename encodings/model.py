@@ -155,11 +155,15 @@ class _Builder:
         self._reachable_poses()
         self._candidate_cells()
         self._variables()
+        self.tick()
         self._actions()
         if self.end is not None:
             add_end_constraints(self)
+        self.tick()
         self._dynamics()
+        self.tick()
         self._collisions()
+        self.tick()
         if self.opt.connectivity == "eager":
             eager_connectivity(self)
         if min_done is not None:
@@ -385,11 +389,16 @@ class _Builder:
                 m.at_most_one.append(group)
 
     def _done(self, min_done: int) -> None:
+        """``done[k]``: every robot waits at step ``k + 1``, and ``done[k + 1]``; so by induction
+        every robot waits at every step after ``k`` (a chain: ``T`` clauses per robot, where one
+        clause per later step would be ``T^2 / 2``)."""
         m = self.m
-        for k in range(max(0, min_done), self.T + 1):
-            d = m.var(("done", k))
-            m.done[k] = d
+        first = max(0, min_done)
+        for k in range(first, self.T + 1):
+            m.done[k] = m.var(("done", k))
+        for k in range(first, self.T):
+            d = m.done[k]
+            m.clauses.append([-d, m.done[k + 1]])
             for i, g in enumerate(self.world.graphs):
-                for t in range(k + 1, self.T + 1):
-                    waits = [v for v, p, a in m.y[(i, t)] if g.kind[a] == Kind.WAIT]
-                    m.clauses.append([-d] + waits)
+                waits = [v for v, p, a in m.y[(i, k + 1)] if g.kind[a] == Kind.WAIT]
+                m.clauses.append([-d] + waits)
