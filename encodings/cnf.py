@@ -1,9 +1,11 @@
 """The model as CNF for python-sat: clauses as they are, cardinality groups through pysat's
 encodings, solved incrementally with assumptions (``done[k]`` for the makespan, a totalizer for
-tiles traveled). CaDiCaL cannot be interrupted, so solving runs in conflict budgets and checks
-the clock between them."""
+tiles traveled). Solving runs in conflict budgets and checks the clock between them; the solvers
+that can be interrupted (all but CaDiCaL) are also interrupted at the deadline by a timer, since
+one budget can take seconds on a large model."""
 from __future__ import annotations
 
+import threading
 import time
 
 from pysat.card import CardEnc, EncType, ITotalizer
@@ -25,6 +27,7 @@ class SatBackend:
         self.model = model
         self.top = model.num_vars
         self.solver = Solver(name=solver)
+        self.interruptible = not solver.startswith("cadical")
         self.solver.append_formula(model.clauses)
         self.num_clauses = len(model.clauses)
         for group in model.exactly_one:
@@ -65,11 +68,17 @@ class SatBackend:
     def solve(self, assumptions: list[int], deadline: float | None) -> str:
         start = time.perf_counter()
         self.stats["solves"] += 1
+        if deadline is not None and start > deadline:
+            return UNKNOWN
+        timer = None
+        if deadline is not None and self.interruptible:
+            timer = threading.Timer(deadline - start, self.solver.interrupt)
+            timer.start()
         try:
             while True:
                 self.solver.conf_budget(BUDGET)
                 before = self.solver.accum_stats().get("conflicts", 0)
-                result = self.solver.solve_limited(assumptions=assumptions)
+                result = self.solver.solve_limited(assumptions=assumptions, expect_interrupt=timer is not None)
                 self.stats["conflicts"] += self.solver.accum_stats().get("conflicts", 0) - before
                 if result is True:
                     self.values = self.solver.get_model()
@@ -80,6 +89,10 @@ class SatBackend:
                 if deadline is not None and time.perf_counter() > deadline:
                     return UNKNOWN
         finally:
+            if timer is not None:
+                timer.cancel()
+                timer.join()
+                self.solver.clear_interrupt()
             self.stats["solve_s"] += time.perf_counter() - start
 
     def value(self, v: int) -> bool:
