@@ -4,7 +4,8 @@ bound in turn, until they meet (``optimal``) or the time runs out (``feasible``,
 1. **First schedule**: the one given (``incumbent``), or the shortest the heuristics find in a
    fifth of the time limit (:func:`.incumbent.first_schedule`): milliseconds on most instances.
 2. Then two searches run side by side, the first in a child process on a second core
-   (``parallel``; without it they take turns in slices of ``slice`` seconds):
+   (``parallel``; without it they take turns in slices of ``slice`` seconds). With ``parallel``
+   the bound search starts before the first schedule is sought, so it has the whole time limit:
 
    - **Raising the bound**: the exact makespan search of :mod:`.exact` from the static lower
      bound up, one model per horizon (its pruning is tightest there). An infeasible horizon ``k``
@@ -152,11 +153,13 @@ class _Anytime:
         if goal_violation(inst.world, inst.start_state, inst.goal_tiles, inst.goal_cells, 0) is None:
             self.best, self.lower = Incumbent(np.zeros((inst.num_robots, 0), np.int64), 0, "none"), 0
             return self.result("optimal")
-        self._first()
+        given = self._given()
         background = self.parallel and _FORK is not None
-        rise = _Background(self) if background else _Rise(self)
-        windows = _Windows(self)
+        rise = _Background(self) if background else None  # the bound search starts at once, beside the heuristics
         try:
+            self._first(given)
+            rise = rise or _Rise(self)
+            windows = _Windows(self)
             while not self.closed() and self.left() > 0:
                 began = time.perf_counter()
                 rise.step(min(self.end, began + (0 if background else self.slice)))
@@ -169,19 +172,24 @@ class _Anytime:
                 windows.step(min(self.end, began + self.slice))
                 self.stats["search_s"] += time.perf_counter() - began
         finally:
-            rise.close()
+            if rise is not None:
+                rise.close()
         if self.best is None:
             return self.result("timeout")
         return self.result("optimal" if self.closed() else "feasible")
 
-    def _first(self) -> None:
-        if self.given is not None:
-            found = from_schedule(self.instance, self.given, "given")
-            if found is None:
-                raise OptionError(f"anytime: the incumbent schedule is not valid for instance "
-                                  f"'{self.instance.name}' (bille check says why)")
-        else:
-            found = first_schedule(self.instance, max(0.01, min(10.0, 0.2 * self.left())))
+    def _given(self) -> Incumbent | None:
+        """The schedule given to start from, checked by the validator (None if none was given)."""
+        if self.given is None:
+            return None
+        found = from_schedule(self.instance, self.given, "given")
+        if found is None:
+            raise OptionError(f"anytime: the incumbent schedule is not valid for instance "
+                              f"'{self.instance.name}' (bille check says why)")
+        return found
+
+    def _first(self, given: Incumbent | None) -> None:
+        found = given or first_schedule(self.instance, max(0.01, min(10.0, 0.2 * self.left())))
         if found is not None:
             self.stats["first"] = {"method": found.method, "makespan": found.makespan,
                                    "s": round(self.elapsed(), 3)}
