@@ -248,3 +248,21 @@ def test_an_incumbent_above_the_horizon_cap_is_still_returned(method, optimum):
     result = solve(inst, method, incumbent=padded, max_makespan=opt - 1)
     assert result.status == "feasible" and result.lower_bound == opt  # every horizon up to the cap refuted
     assert result.metrics.makespan == opt + 3 and validate(inst, result.schedule).valid
+
+
+@pytest.mark.parametrize("solver", ["glucose42", "minisat22", "cadical195"])
+def test_a_sat_solve_past_its_deadline_answers_unknown_without_solving(solver):
+    import time
+
+    from bille.encodings.cnf import SatBackend
+    from bille.encodings.model import Options, build
+
+    inst = load_instance(bundled_path("corridor-2"))
+    backend = SatBackend(build(inst, 13, Options()), solver)
+    try:
+        assert backend.solve([], time.perf_counter() - 1) == "unknown"
+        assert backend.stats["conflicts"] == 0
+        assert backend.solve([], time.perf_counter() + 600) == "sat"  # a timer that never fires
+        assert backend.solve([], None) == "sat"  # and left no interrupt behind
+    finally:
+        backend.delete()
