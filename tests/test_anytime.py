@@ -59,7 +59,7 @@ def _padded(inst, schedule, waits):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("solver", ["glucose42", "cpsat"])
+@pytest.mark.parametrize("solver", ["minisat22", "glucose42", "cpsat"])
 def test_the_windows_shorten_a_padded_schedule_to_the_optimum(monkeypatch, solver):
     monkeypatch.setattr(anytime._Rise, "step", lambda self, until: None)  # no bound search: windows only
     inst = load_instance(bundled_path("corridor-2"))
