@@ -155,7 +155,6 @@ class _Builder:
         self._reachable_poses()
         self._candidate_cells()
         self._variables()
-        self.tick()
         self._actions()
         if self.end is not None:
             add_end_constraints(self)
@@ -163,7 +162,6 @@ class _Builder:
         self._dynamics()
         self.tick()
         self._collisions()
-        self.tick()
         if self.opt.connectivity == "eager":
             eager_connectivity(self)
         if min_done is not None:
@@ -389,10 +387,8 @@ class _Builder:
                 m.at_most_one.append(group)
 
     def _done(self, min_done: int) -> None:
-        """``done[k]``: every robot waits at every step after ``k``, a clause per robot and later
-        step. (A chain ``done[k] -> done[k + 1]`` with the waits of step ``k + 1`` alone would
-        have ``T`` clauses per robot instead of ``T^2 / 2``, and propagates the same, but it
-        steered the solvers worse: bridge-3's windows ended at 26-30 steps in 60 s against 15.)"""
+        """``done[k]``: every robot waits at every step after ``k`` (a clause per later step: a
+        chain ``done[k] -> done[k + 1]`` steered the solvers worse, bridge-3 26-30 against 15)."""
         m, first = self.m, max(0, min_done)
         waits = {(i, t): [v for v, p, a in m.y[(i, t)] if g.kind[a] == Kind.WAIT]
                  for i, g in enumerate(self.world.graphs) for t in range(first + 1, self.T + 1)}

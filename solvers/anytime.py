@@ -31,7 +31,6 @@ shortened, proved not to shorten, undecided), and the seconds spent on each sear
 """
 from __future__ import annotations
 
-import dataclasses
 import multiprocessing
 import time
 from typing import Callable
@@ -39,21 +38,18 @@ from typing import Callable
 import numpy as np
 
 from bille.encodings.cnf import SOLVERS, SatBackend
-from bille.encodings.connectivity import connectivity_cuts
 from bille.encodings.cpsat import CpSatBackend
-from bille.encodings.ends import roles_taken
 from bille.encodings.model import Options, OutOfTime, build
-from bille.encodings.solution import decode, tiles_at
-from bille.instances import Instance, OptionError, instance_at
-from bille.instances.grid import Grid
+from bille.encodings.solution import decode
+from bille.instances import Instance, OptionError
 from bille.instances.result import Result
-from bille.instances.rules import goal_violation, run
+from bille.instances.rules import goal_violation
 from bille.instances.schedule import Schedule
 
 from .bounds import Bounds, lower_bound
 from .incumbent import Incumbent, first_schedule, from_schedule
+from .windows import SAT, UNKNOWN, Windows, solve_with_cuts
 
-SAT, UNSAT, UNKNOWN = "sat", "unsat", "unknown"
 try:  # the bound search runs in a forked child process where the platform has fork
     _FORK = multiprocessing.get_context("fork")
 except ValueError:
@@ -160,7 +156,7 @@ class _Anytime:
         try:
             self._first(given)
             rise = rise or _Rise(self)
-            windows = _Windows(self)
+            windows = Windows(self)
             while not self.closed() and self.left() > 0:
                 began = time.perf_counter()
                 rise.step(min(self.end, began + (0 if background else self.slice)))
@@ -207,18 +203,6 @@ class _Anytime:
         return Result("anytime", status, schedule, lower_bound=lower, stats=self.stats, time_s=self.elapsed())
 
 
-def _solve(backend: SatBackend, model, instance: Instance, assumptions, deadline) -> str:
-    """Solve, adding connectivity cuts while a solution breaks it (lazily encoded parts)."""
-    while True:
-        status = backend.solve(assumptions, deadline)
-        if status != SAT:
-            return status
-        cuts = connectivity_cuts(model, instance, tiles_at(model, instance, backend.value))
-        if not cuts:
-            return status
-        backend.add_clauses(cuts)
-
-
 class _Rise:
     """The exact makespan search from the lower bound up, in slices (module docstring)."""
 
@@ -240,7 +224,7 @@ class _Rise:
             if isinstance(self.backend, CpSatBackend):  # eager connectivity: no cuts to add
                 status = self.backend.solve(max(0.01, until - time.perf_counter()))
             else:
-                status = _solve(self.backend, self.model, inst, [], until)
+                status = solve_with_cuts(self.backend, self.model, inst, [], until)
             if status == UNKNOWN:
                 return
             if status == SAT:  # every horizon below k is infeasible: optimal
@@ -325,107 +309,3 @@ def _rise_child(run: _Anytime, outbox) -> None:
             break
     rise.close()
     outbox.close()
-
-
-class _Windows:
-    """Large neighbourhood search over time windows of the best schedule (module docstring)."""
-
-    def __init__(self, run: _Anytime) -> None:
-        self.run = run
-        self.length = run.window
-        self.done: set = set()  # (schedule key, a, b) proved not to shorten
-        self.cursor = 0
-        self.exhausted = False  # every window of the best schedule, itself included, proved
-        self.budget = run.slice  # seconds per window: grows by half after an undecided one
-
-    def windows(self, makespan: int) -> list[tuple[int, int]]:
-        w = min(self.length, makespan)
-        stride = max(1, w // 2)
-        out = [(makespan - w, makespan)]  # the tail first: it ends at the goal, the freest window
-        out += [(a, a + w) for a in range(0, makespan - w, stride)]
-        return out
-
-    def step(self, until: float) -> None:
-        run = self.run
-        while time.perf_counter() < until and not run.closed():
-            best = run.best
-            key = best.ids.tobytes()
-            todo = [(a, b) for a, b in self.windows(best.makespan) if (key, a, b) not in self.done]
-            if not todo:
-                if self.length >= best.makespan:
-                    self.exhausted = True  # the whole schedule included: only the bound can close
-                    return
-                self.length = min(best.makespan, self.length + max(1, self.length // 2))
-                continue
-            a, b = todo[self.cursor % len(todo)]
-            self.cursor += 1
-            status = self.shorten(best, a, b, min(run.end, time.perf_counter() + self.budget))
-            if status == UNSAT:
-                self.done.add((key, a, b))
-            elif status == UNKNOWN:
-                self.budget *= 1.5
-
-    def shorten(self, best: Incumbent, a: int, b: int, until: float) -> str:
-        run, inst = self.run, self.run.instance
-        counts = run.stats["windows"]
-        counts["tried"] += 1
-        states = [inst.start_state] + list(run_states(inst, best.ids))
-        sub = instance_at(inst, states[a], f"{inst.name}[{a}:{b}]")
-        end = None
-        if b < best.makespan:
-            end = states[b]
-            sub = dataclasses.replace(sub, goal=Grid.from_masks(inst.width, inst.height, inst.start.obstacles,
-                                                                end.tiles))
-        L = b - a - 1
-        if L < 1:
-            return UNSAT
-        try:
-            model = build(sub, L, Options(), min_done=1, deadline=until, end=end, swap=run.swap)
-        except OutOfTime:
-            counts["undecided"] += 1
-            return UNKNOWN
-        m = inst.num_robots
-        if run.solver == "cpsat":
-            found = _shortest_cpsat(model, sub, L, until)
-            if isinstance(found, str):
-                counts["undecided" if found == UNKNOWN else "not_shorter"] += 1
-                return found
-            k, part, roles = found
-        else:
-            backend = SatBackend(model, run.solver)
-            try:
-                status = _solve(backend, model, sub, [model.done[L]], until)
-                if status != SAT:
-                    counts["undecided" if status == UNKNOWN else "not_shorter"] += 1
-                    return status
-                k, part, roles = L, decode(model, sub, backend.value), roles_taken(model, backend.value, m)
-                while k > 1 and _solve(backend, model, sub, [model.done[k - 1]], until) == SAT:
-                    k, part, roles = k - 1, decode(model, sub, backend.value), roles_taken(model, backend.value, m)
-            finally:
-                backend.delete()
-        # robot i goes on with the rest of the schedule of the robot whose end state it took
-        ids = np.concatenate([best.ids[:, :a], part[:, :k], best.ids[roles, b:]], axis=1)
-        found = from_schedule(inst, Schedule.from_ids(inst, ids), "anytime")
-        if found is not None and run.improve(found):
-            counts["shortened"] += 1
-            counts["swapped"] += roles != list(range(m))
-        return SAT
-
-
-def _shortest_cpsat(model, sub: Instance, L: int, until: float):
-    """The window's shortest part with one CP-SAT worker: ``done[L]`` required, as many steps
-    ``done`` as can be (``done[k]``: every robot waits from step ``k`` on). Returns ``(k, part,
-    roles)`` for the best part found (proved shortest or not), else ``unsat`` or ``unknown``."""
-    backend = CpSatBackend(model, 1, presolve=False)
-    backend.add_clauses([[model.done[L]]])
-    status = backend.solve(max(0.01, until - time.perf_counter()), minimize=[model.done[k] for k in range(1, L + 1)],
-                           maximize=True)
-    if backend.values is None:
-        return status
-    k = next(k for k in range(1, L + 1) if backend.value(model.done[k]))
-    return k, decode(model, sub, backend.value), roles_taken(model, backend.value, sub.num_robots)
-
-
-def run_states(instance: Instance, ids: np.ndarray):
-    """The states after each step of a valid schedule's action ids."""
-    return run(instance.world, instance.start_state, ids)
