@@ -37,7 +37,7 @@ from typing import Callable
 
 import numpy as np
 
-from bille.encodings.cnf import SOLVERS, SatBackend
+from bille.encodings.cnf import SAT, SOLVERS, UNKNOWN, SatBackend
 from bille.encodings.cpsat import CpSatBackend
 from bille.encodings.model import Options, OutOfTime, build
 from bille.encodings.solution import decode
@@ -48,7 +48,7 @@ from bille.instances.schedule import Schedule
 
 from .bounds import Bounds, lower_bound
 from .incumbent import Incumbent, first_schedule, from_schedule
-from .windows import SAT, UNKNOWN, Windows, solve_with_cuts
+from .windows import Windows, solve_with_cuts
 
 try:  # the bound search runs in a forked child process where the platform has fork
     _FORK = multiprocessing.get_context("fork")

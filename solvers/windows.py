@@ -7,7 +7,7 @@ import time
 
 import numpy as np
 
-from bille.encodings.cnf import SatBackend
+from bille.encodings.cnf import SAT, UNKNOWN, UNSAT, SatBackend
 from bille.encodings.connectivity import connectivity_cuts
 from bille.encodings.cpsat import CpSatBackend
 from bille.encodings.ends import roles_taken
@@ -19,9 +19,6 @@ from bille.instances.rules import run
 from bille.instances.schedule import Schedule
 
 from .incumbent import Incumbent, from_schedule
-
-SAT, UNSAT, UNKNOWN = "sat", "unsat", "unknown"
-
 
 def solve_with_cuts(backend: SatBackend, model, instance: Instance, assumptions, deadline) -> str:
     """Solve, adding connectivity cuts while a solution breaks it (lazily encoded parts)."""
@@ -92,32 +89,40 @@ class Windows:
         except OutOfTime:
             counts["undecided"] += 1
             return UNKNOWN
-        m = inst.num_robots
         if run.solver == "cpsat":
             found = _shortest_cpsat(model, sub, L, until)
-            if isinstance(found, str):
-                counts["undecided" if found == UNKNOWN else "not_shorter"] += 1
-                return found
-            k, part, roles = found
         else:
-            backend = SatBackend(model, run.solver)
-            try:
-                status = solve_with_cuts(backend, model, sub, [model.done[L]], until)
-                if status != SAT:
-                    counts["undecided" if status == UNKNOWN else "not_shorter"] += 1
-                    return status
-                k, part, roles = L, decode(model, sub, backend.value), roles_taken(model, backend.value, m)
-                while k > 1 and solve_with_cuts(backend, model, sub, [model.done[k - 1]], until) == SAT:
-                    k, part, roles = k - 1, decode(model, sub, backend.value), roles_taken(model, backend.value, m)
-            finally:
-                backend.delete()
+            found = _shortest_sat(model, sub, L, until, run.solver)
+        if isinstance(found, str):
+            counts["undecided" if found == UNKNOWN else "not_shorter"] += 1
+            return found
+        k, part, roles = found
         # robot i goes on with the rest of the schedule of the robot whose end state it took
         ids = np.concatenate([best.ids[:, :a], part[:, :k], best.ids[roles, b:]], axis=1)
-        found = from_schedule(inst, Schedule.from_ids(inst, ids), "anytime")
-        if found is not None and run.improve(found):
+        spliced = from_schedule(inst, Schedule.from_ids(inst, ids), "anytime")
+        if spliced is not None and run.improve(spliced):
             counts["shortened"] += 1
-            counts["swapped"] += roles != list(range(m))
+            counts["swapped"] += roles != list(range(inst.num_robots))
         return SAT
+
+
+def _shortest_sat(model, sub: Instance, L: int, until: float, solver: str):
+    """The window's shortest part with a python-sat solver: ``done[L]`` assumed, then ``done[k -
+    1]`` while ``done[k]`` is satisfiable. Returns ``(k, part, roles)`` for the shortest part
+    found, else ``unsat`` or ``unknown``."""
+    backend = SatBackend(model, solver)
+    try:
+        status = solve_with_cuts(backend, model, sub, [model.done[L]], until)
+        if status != SAT:
+            return status
+        k = L
+        found = _part(model, sub, backend, k)
+        while k > 1 and solve_with_cuts(backend, model, sub, [model.done[k - 1]], until) == SAT:
+            k -= 1
+            found = _part(model, sub, backend, k)
+        return found
+    finally:
+        backend.delete()
 
 
 def _shortest_cpsat(model, sub: Instance, L: int, until: float):
@@ -130,7 +135,11 @@ def _shortest_cpsat(model, sub: Instance, L: int, until: float):
                            maximize=True)
     if backend.values is None:
         return status
-    k = next(k for k in range(1, L + 1) if backend.value(model.done[k]))
+    return _part(model, sub, backend, next(k for k in range(1, L + 1) if backend.value(model.done[k])))
+
+
+def _part(model, sub: Instance, backend, k: int):
+    """``(k, part, roles)`` of the backend's solution: its first ``k`` steps are the part."""
     return k, decode(model, sub, backend.value), roles_taken(model, backend.value, sub.num_robots)
 
 
