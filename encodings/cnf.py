@@ -2,7 +2,8 @@
 encodings, solved incrementally with assumptions (``done[k]`` for the makespan, a totalizer for
 tiles traveled). Solving runs in conflict budgets and checks the clock between them; the solvers
 that can be interrupted (all but CaDiCaL) are also interrupted at the deadline by a timer, since
-one budget can take seconds on a large model."""
+one budget can take seconds on a large model (under an address-space limit that leaves less than
+``THREAD_ROOM``, the budgets alone)."""
 from __future__ import annotations
 
 import threading
@@ -11,10 +12,16 @@ import time
 from pysat.card import CardEnc, EncType, ITotalizer
 from pysat.solvers import Solver
 
+from bille.instances.limits import address_room
+
 from .model import Model
 
 SAT, UNSAT, UNKNOWN = "sat", "unsat", "unknown"
 BUDGET = 2_000  # conflicts per call between clock checks
+# address space a timer thread needs (its stack, and the malloc arena glibc gives a new thread):
+# with less room under an address-space limit, starting one can fail, or hang in
+# ``Thread.start`` when the new thread dies before it says it has started
+THREAD_ROOM = 1 << 30
 # python-sat's incremental solvers that take assumptions and conflict budgets
 SOLVERS = ("cadical195", "cadical153", "cadical103", "glucose42", "glucose4", "glucose3", "gluecard4",
            "gluecard3", "maplechrono", "maplecm", "maplesat", "mergesat3", "minicard", "minisat22")
@@ -71,7 +78,7 @@ class SatBackend:
         if deadline is not None and start > deadline:
             return UNKNOWN
         timer = None
-        if deadline is not None and self.interruptible:
+        if deadline is not None and self.interruptible and address_room() >= THREAD_ROOM:
             timer = threading.Timer(deadline - start, self.solver.interrupt)
             timer.start()
         try:

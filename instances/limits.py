@@ -18,6 +18,25 @@ from .moveset import Moveset
 GIB = 1 << 30
 
 
+def mapped() -> int:
+    """This process's address space in bytes (0 where /proc is missing)."""
+    try:
+        with open("/proc/self/status") as f:
+            line = next(line for line in f if line.startswith("VmSize:"))
+        return int(line.split()[1]) * 1024
+    except (OSError, StopIteration):
+        return 0
+
+
+def address_room() -> float:
+    """Bytes of address space this process may still map under its limit (``ulimit -v``, or the
+    sweep's ``memory_limit``); infinite without a limit."""
+    soft, _ = resource.getrlimit(resource.RLIMIT_AS)
+    if soft in (resource.RLIM_INFINITY, -1):
+        return float("inf")
+    return soft - mapped()
+
+
 def human(size: float) -> str:
     """Bytes as GiB, or MiB below one GiB."""
     return f"{size / GIB:.1f} GiB" if size >= GIB else f"{size / (1 << 20):.1f} MiB"

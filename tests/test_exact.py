@@ -266,3 +266,31 @@ def test_a_sat_solve_past_its_deadline_answers_unknown_without_solving(solver):
         assert backend.solve([], None) == "sat"  # and left no interrupt behind
     finally:
         backend.delete()
+
+
+def test_no_timer_thread_under_a_tight_address_space_limit():
+    # under an address-space limit with little room, starting a thread can hang in
+    # Thread.start: the solve then runs on conflict budgets alone and still ends at its deadline
+    import subprocess
+    import sys
+
+    code = """
+import resource, threading, time
+from bille.encodings.cnf import THREAD_ROOM, SatBackend
+from bille.encodings.model import Options, build
+from bille.instances import load_instance
+from bille.instances.bundled import bundled_path
+from bille.instances.limits import address_room, mapped
+assert address_room() == float("inf")
+backend = SatBackend(build(load_instance(bundled_path("corridor-2")), 12, Options()), "glucose42")
+size = mapped() + THREAD_ROOM // 4
+resource.setrlimit(resource.RLIMIT_AS, (size, size))
+assert 0 < address_room() < THREAD_ROOM
+started = []
+threading.Timer = lambda *args: started.append(args)  # a timer would be created through this
+assert backend.solve([], time.perf_counter() + 60) == "unsat"  # corridor-2's optimum is 13
+assert not started
+print("ok")
+"""
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert out.stdout.strip() == "ok", out.stderr

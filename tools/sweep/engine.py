@@ -142,22 +142,14 @@ def _start(child) -> None:
             main.__file__ = path
 
 
-def _mapped() -> int:
-    """This process's address space in bytes (0 where /proc is missing)."""
-    try:
-        with open("/proc/self/status") as f:
-            line = next(line for line in f if line.startswith("VmSize:"))
-        return int(line.split()[1]) * 1024
-    except (OSError, StopIteration):
-        return 0
-
-
 def solve_in_child(outbox, text: str, method: str, options: dict, time_limit: float, memory_limit) -> None:
     """The child's side: limits, the solve, one row sent back."""
     import resource
 
+    from bille.instances.limits import mapped
+
     if memory_limit:  # on top of what the child has mapped already (bille and its libraries)
-        size = _mapped() + memory_limit * 1024 * 1024
+        size = mapped() + memory_limit * 1024 * 1024
         resource.setrlimit(resource.RLIMIT_AS, (size, size))
     try:
         from bille.instances import instance_from_text
