@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bille.heuristics import lacam, reconfigure, temporal_astar
+from bille.heuristics import lacam, lacam_states, reconfigure, temporal_astar
 from bille.instances import Instance
 from bille.instances.metrics import metrics
 from bille.instances.schedule import Schedule, bind
@@ -74,6 +74,27 @@ def first_schedule(instance: Instance, budget: float, improve: bool = True) -> I
         if candidate is not None and (best is None or candidate.makespan < best.makespan):
             best = candidate
     return best
+
+
+def complete_search(instance: Instance, time_limit: float, seed: int = 0) -> tuple[Incumbent | None, bool]:
+    """A first schedule from the complete planner, for when the heuristics found none: LaCAM*
+    over whole states (:mod:`bille.heuristics.lacam_states`), after LaCAM* on the fixed
+    structure on path planning (a walking schedule, found faster where one exists). Returns the
+    validated schedule or None, and whether the search proved that no schedule exists (it
+    exhausted the space of whole states; a walking search that fails proves nothing, since
+    robots may move tiles aside).
+    """
+    end = time.perf_counter() + time_limit
+    if not instance.is_reconfiguration:
+        found = lacam.plan(instance, time_limit=time_limit, improve=0.0, seed=seed)
+        if found.schedule is not None:
+            return from_schedule(instance, found.schedule, "lacam"), False
+    if instance.collisions == "classic" or time.perf_counter() >= end:
+        return None, False
+    found = lacam_states.plan(instance, time_limit=end - time.perf_counter(), seed=seed)
+    if found.schedule is not None:
+        return from_schedule(instance, found.schedule, "lacam-states"), False
+    return None, found.status == "infeasible"
 
 
 def _run(instance: Instance, how, limit: float, improve: bool):

@@ -82,6 +82,32 @@ def test_an_impossible_instance_is_infeasible_with_no_bound():
     assert result.status == "infeasible" and result.schedule is None and result.lower_bound is None
 
 
+def test_with_no_schedule_from_the_heuristics_the_complete_planner_gives_one(monkeypatch):
+    monkeypatch.setattr(anytime, "first_schedule", lambda *args, **kw: None)
+    monkeypatch.setattr(anytime._Rise, "step", lambda self, until: None)  # no bound search
+    inst = SOLVABLE[0]
+    result = solve(inst, "anytime", time_limit=2, parallel=False)
+    assert result.stats["first"]["method"] in ("lacam", "lacam-states"), result.stats
+    assert validate(inst, result.schedule).valid
+    assert result.metrics.makespan >= OPTIMA[inst]
+    _monotone(result.stats, result.stats["first"]["makespan"])
+
+
+@pytest.mark.slow
+def test_an_instance_the_complete_planner_exhausts_is_infeasible():
+    # no static proof on these: the search over whole states runs out of states, as the brute force
+    from bille.solvers.bounds import lower_bound
+    from test_lacam import TINY_RECONFIGURATION, brute_force
+
+    hard = [i for i in TINY_RECONFIGURATION if not lower_bound(i).impossible
+            and brute_force(i.name).status == "infeasible"][:3]
+    assert len(hard) == 3
+    for inst in hard:
+        result = solve(inst, "anytime", time_limit=30)
+        assert result.status == "infeasible" and result.schedule is None and result.lower_bound is None
+        assert result.stats["reason"] == "the complete planner exhausted the reachable states"
+
+
 def test_gave_up_and_out_of_time_are_told_apart():
     deadlock = solve(load_instance(bundled_path("crowded-2")), "temporal-astar", time_limit=60)
     assert deadlock.status == "unsolved" and deadlock.stats["failure"] == "deadlock" and deadlock.time_s < 60
