@@ -177,3 +177,23 @@ def test_a_window_may_end_with_interchangeable_robots_in_each_others_places():
         assert backend.solve([], None) == "unsat"
     finally:
         backend.delete()
+
+
+@pytest.mark.slow
+def test_compaction_moves_actions_into_waits_and_keeps_the_schedule_valid():
+    from bille.solvers.compact import compact
+    from test_lacam import TINY_RECONFIGURATION, brute_force
+
+    inst = load_instance(bundled_path("corridor-2"))
+    optimal = solve(inst, "sat", minimize_travel=False)
+    late = bind(inst, _padded(inst, optimal.schedule, 4))  # four joint waits after the first step
+    back = compact(inst, late)
+    assert validate(inst, Schedule.from_ids(inst, back)).valid
+    assert back.shape[1] == optimal.metrics.makespan
+    for tiny in TINY_RECONFIGURATION[:12]:  # schedules full of waits from the whole-state search
+        found = solve(tiny, "lacam", time_limit=10, improve=0.0)
+        if found.schedule is None:
+            continue
+        squeezed = compact(tiny, bind(tiny, found.schedule))
+        report = validate(tiny, Schedule.from_ids(tiny, squeezed))
+        assert report.valid and brute_force(tiny.name).metrics.makespan <= squeezed.shape[1] <= found.metrics.makespan
