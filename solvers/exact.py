@@ -38,7 +38,7 @@ from bille.instances.rules import goal_violation
 from bille.instances.schedule import Schedule
 
 from .bounds import Bounds, lower_bound
-from .incumbent import first_schedule, from_schedule
+from .incumbent import complete_search, first_schedule, from_schedule
 from .lanes import Lanes
 
 SAT, UNSAT, UNKNOWN = "sat", "unsat", "unknown"
@@ -186,6 +186,8 @@ class _Search(Lanes):
             # does not wait for heuristics that cannot succeed
             budget = 1.0 if self.deadline is None else min(1.0, 0.05 * (self.deadline - time.perf_counter()))
             found = first_schedule(self.instance, max(budget, 0.01), improve=False)  # a cap: the proof follows
+            if found is None and self.deadline is not None:  # then the complete planner, a tenth of the time
+                found = complete_search(self.instance, max(0.01, 0.1 * (self.deadline - time.perf_counter())))[0]
         if found is None:
             return
         self.stats["incumbent"] = {"method": found.method, "makespan": found.makespan}

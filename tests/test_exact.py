@@ -294,3 +294,17 @@ print("ok")
 """
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert out.stdout.strip() == "ok", out.stderr
+
+
+@pytest.mark.parametrize("method", ["cpsat", "sat"])
+def test_with_no_heuristic_schedule_the_incumbent_comes_from_the_complete_planner(monkeypatch, method):
+    from bille.solvers import exact
+    from test_lacam import TINY_RECONFIGURATION, brute_force
+
+    monkeypatch.setattr(exact, "first_schedule", lambda *args, **kw: None)
+    inst = next(i for i in TINY_RECONFIGURATION if brute_force(i.name).status == "optimal"
+                and brute_force(i.name).metrics.makespan >= 4)
+    result = solve(inst, method, time_limit=60)
+    assert result.stats["incumbent"]["method"] in ("lacam", "lacam-states"), result.stats
+    assert result.stats["incumbent"]["makespan"] >= result.metrics.makespan == brute_force(inst.name).metrics.makespan
+    assert result.status == "optimal" and validate(inst, result.schedule).valid
