@@ -36,8 +36,10 @@ def compact(instance: Instance, ids: np.ndarray, time_limit: float = 1.0) -> np.
         moved = False
         for t in range(1, ids.shape[1]):
             for i in range(ids.shape[0]):
-                u = t
-                while u > 0 and ids[i, u] != wait[i] and ids[i, u - 1] == wait[i] and _earlier(world, states, ids, i, u, wait[i]):
+                u = t  # robot i's action at t goes back through the waits before it, one by one
+                while u > 0 and ids[i, u] != wait[i] and ids[i, u - 1] == wait[i]:
+                    if not _earlier(world, states, ids, i, u, wait[i]):
+                        break
                     u -= 1
                     moved = True
     return ids[:, :metrics(instance, ids).makespan]
