@@ -84,6 +84,18 @@ def test_solve_writes_a_valid_schedule(tmp_path, capsys):
     assert validate(load_instance(bundled_path("crowded-2")), load_schedule(out_path)).valid
 
 
+def test_solve_says_why_an_instance_is_infeasible(tmp_path, capsys):
+    from bille.instances import save_instance
+    from helpers import make
+
+    walled = make("TT#..\nTT#..", [{"at": [0, 0]}], goal="..#TT\n..#TT", moveset="point")
+    save_instance(walled, tmp_path / "walled.yaml")
+    code, out, _ = run(capsys, "solve", str(tmp_path / "walled.yaml"), "--method", "anytime", "--time-limit", "5")
+    assert code == 1 and "anytime: infeasible" in out
+    reason = next(line for line in out.splitlines() if line.startswith("reason: "))
+    assert "no robot can ever place a tile on (3, 0)" in reason, out
+
+
 @pytest.mark.parametrize("argv", [
     ["check", "corridor-2"],
     ["frobnicate"],

@@ -64,7 +64,7 @@ def solve_(instance: str, method: str, epsilon, horizon, time_limit, threads, lo
     if result.lower_bound is not None:
         text += f"; makespan lower bound {result.lower_bound}"
     click.echo(text)
-    for key in ("unreachable", "failure", "violation"):
+    for key in ("unreachable", "failure", "reason", "violation"):
         if key in result.stats:
             click.echo(f"{key}: {_explain(inst, key, result.stats[key])}")
     if result.stats.get("load_transfer"):
