@@ -199,11 +199,14 @@ class _Anytime:
     def _first(self, given: Incumbent | None) -> None:
         found = given or first_schedule(self.instance, max(0.01, min(10.0, 0.2 * self.left())))
         if found is not None:
-            self.stats["first"] = {"method": found.method, "makespan": found.makespan,
-                                   "s": round(self.elapsed(), 3)}
-            self.improve(found)
+            self.start_from(found)
         else:
             self.report()
+
+    def start_from(self, found: Incumbent) -> None:
+        """``found`` is the first schedule: ``stats.first`` names it."""
+        self.stats["first"] = {"method": found.method, "makespan": found.makespan, "s": round(self.elapsed(), 3)}
+        self.improve(found)
 
     def result(self, status: str) -> Result:
         for key in ("bound_s", "search_s"):
@@ -233,8 +236,7 @@ class _Seek:
         run.stats["seek_s"] = round(run.stats.get("seek_s", 0.0) + time.perf_counter() - began, 3)
         self.limit = float("inf")
         if found is not None:
-            run.stats["first"] = {"method": found.method, "makespan": found.makespan, "s": round(run.elapsed(), 3)}
-            run.improve(found)
+            run.start_from(found)
 
 
 class _Rise:

@@ -17,7 +17,6 @@ import numpy as np
 
 from bille.instances import Instance
 from bille.instances.metrics import metrics
-from bille.instances.moveset import Kind
 from bille.instances.rules import State, Violation, apply, run
 
 
@@ -26,7 +25,7 @@ def compact(instance: Instance, ids: np.ndarray, time_limit: float = 1.0) -> np.
     it can go (module docstring), trimmed of trailing waits; at most ``time_limit`` seconds."""
     world = instance.world
     ids = np.array(ids, dtype=np.int64, copy=True)
-    wait = np.array([int(np.flatnonzero(g.kind == Kind.WAIT)[0]) for g in world.graphs], dtype=np.int64)
+    wait = [g.wait for g in world.graphs]
     states: list[State] = [instance.start_state, *run(world, instance.start_state, ids)]
     if any(isinstance(s, Violation) for s in states):
         raise ValueError("compact: the schedule is not valid")

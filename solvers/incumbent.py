@@ -89,7 +89,7 @@ def compacted(instance: Instance, found: Incumbent, time_limit: float) -> Incumb
     return from_schedule(instance, Schedule.from_ids(instance, ids), found.method) or found
 
 
-def complete_search(instance: Instance, time_limit: float, seed: int = 0) -> tuple[Incumbent | None, bool]:
+def complete_search(instance: Instance, time_limit: float) -> tuple[Incumbent | None, bool]:
     """A first schedule from the complete planner, for when the heuristics found none: LaCAM*
     over whole states (:mod:`bille.heuristics.lacam_states`), after LaCAM* on the fixed
     structure on path planning (a walking schedule, found faster where one exists). Returns the
@@ -99,12 +99,12 @@ def complete_search(instance: Instance, time_limit: float, seed: int = 0) -> tup
     """
     end = time.perf_counter() + time_limit
     if not instance.is_reconfiguration:
-        found = lacam.plan(instance, time_limit=time_limit, improve=0.0, seed=seed)
+        found = lacam.plan(instance, time_limit=time_limit, improve=0.0)
         if found.schedule is not None:
             return _compacted_result(instance, found, "lacam", time_limit), False
     if instance.collisions == "classic" or time.perf_counter() >= end:
         return None, False
-    found = lacam_states.plan(instance, time_limit=end - time.perf_counter(), seed=seed)
+    found = lacam_states.plan(instance, time_limit=end - time.perf_counter())
     if found.schedule is not None:
         return _compacted_result(instance, found, "lacam-states", time_limit), False
     return None, found.status == "infeasible"

@@ -20,6 +20,7 @@ from bille.instances.schedule import Schedule
 
 from .incumbent import Incumbent, from_schedule
 
+
 def solve_with_cuts(backend: SatBackend, model, instance: Instance, assumptions, deadline) -> str:
     """Solve, adding connectivity cuts while a solution breaks it (lazily encoded parts)."""
     while True:
