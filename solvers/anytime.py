@@ -50,7 +50,7 @@ from bille.instances.rules import goal_violation
 from bille.instances.schedule import Schedule
 
 from .bounds import Bounds, lower_bound
-from .incumbent import Incumbent, complete_search, first_schedule, from_schedule
+from .incumbent import EXHAUSTED, Incumbent, complete_search, first_schedule, from_schedule
 from .windows import Windows, solve_with_cuts
 
 try:  # the bound search runs in a forked child process where the platform has fork
@@ -180,7 +180,7 @@ class _Anytime:
             if rise is not None:
                 rise.close()
         if seek.infeasible:
-            self.stats["reason"] = "the complete planner exhausted the reachable states"
+            self.stats["reason"] = EXHAUSTED
             return self.result("infeasible")
         if self.best is None:
             return self.result("timeout")

@@ -9,15 +9,15 @@ step ``k``), incrementally, rebuilding only when the range is exhausted. With la
 each solution is checked step by step and a disconnected one adds cuts for every step before the
 solver goes on. Then, at the optimal makespan, tiles traveled are minimized (``minimize_travel``).
 
-Incumbent: a schedule given with ``incumbent``, or else the best the heuristics find in a
-twentieth of the time limit (at most 1 s; :func:`.incumbent.first_schedule`), validated; its makespan caps
-the horizons, and it is the schedule returned (``feasible``) when time runs out.
+Incumbent: a schedule given with ``incumbent``, else the best the heuristics find in a twentieth
+of the time limit (at most 1 s), else the complete planner's in a tenth (:mod:`.incumbent`),
+validated; its makespan caps the horizons, and it is returned (``feasible``) when time runs out.
 
-Statuses: ``optimal`` (makespan proved optimal; ``stats.tiles_traveled_optimal`` says whether
-the second objective was proved too), ``feasible`` (time ran out; the incumbent, with the lower
-bound the search reached), ``infeasible`` (no schedule within the horizon cap, or a static reason
-in ``stats.reason``), ``timeout`` (time ran out with no schedule; the lower bound says how far the
-search got).
+Statuses: ``optimal`` (``stats.tiles_traveled_optimal`` says whether the second objective was
+proved too), ``feasible`` (time ran out; the incumbent, with the lower bound reached),
+``infeasible`` (a static proof, or the complete planner exhausted the reachable states:
+``stats.reason``), ``unsolved`` (no schedule up to the horizon cap), ``timeout`` (time ran out
+with no schedule; the lower bound says how far the search got).
 """
 from __future__ import annotations
 
@@ -38,7 +38,7 @@ from bille.instances.rules import goal_violation
 from bille.instances.schedule import Schedule
 
 from .bounds import Bounds, lower_bound
-from .incumbent import complete_search, first_schedule, from_schedule
+from .incumbent import EXHAUSTED, to_cap
 from .lanes import Lanes
 
 SAT, UNSAT, UNKNOWN = "sat", "unsat", "unknown"
@@ -173,28 +173,18 @@ class _Search(Lanes):
             return self.result("feasible", best, lower=lower)
         return self.result("timeout", lower=lower)
 
-    def _find_incumbent(self) -> None:
-        """A first schedule (the one given, else from the heuristics); its makespan caps the search."""
-        given = self.kw.pop("incumbent", None)
-        if given is not None:
-            found = from_schedule(self.instance, given, "given")
-            if found is None:
-                raise OptionError(f"{self.method}: the incumbent schedule is not valid for instance "
-                                  f"'{self.instance.name}' (bille check says why)")
-        else:
-            # a cap and a fallback only: a little time, so that refuting an infeasible instance
-            # does not wait for heuristics that cannot succeed
-            budget = 1.0 if self.deadline is None else min(1.0, 0.05 * (self.deadline - time.perf_counter()))
-            found = first_schedule(self.instance, max(budget, 0.01), improve=False)  # a cap: the proof follows
-            if found is None and self.deadline is not None:  # then the complete planner, a tenth of the time
-                found = complete_search(self.instance, max(0.01, 0.1 * (self.deadline - time.perf_counter())))[0]
+    def _find_incumbent(self) -> bool:
+        """A first schedule (:func:`.incumbent.to_cap`); its makespan caps the search. True if
+        the complete planner proved instead that no schedule exists."""
+        found, exhausted = to_cap(self.instance, self.kw.pop("incumbent", None), self.deadline, self.method)
         if found is None:
-            return
+            return exhausted
         self.stats["incumbent"] = {"method": found.method, "makespan": found.makespan}
         self.fallback = found.ids  # returned if the search ends without a schedule of its own
         if found.makespan <= self.cap:
             self.incumbent, self.cap = found.ids, found.makespan
             self.stats["horizon_cap"] = found.makespan
+        return False
 
     def _report(self, last: dict | None = None) -> None:
         if self.progress is not None:
@@ -215,7 +205,9 @@ class _Search(Lanes):
         if goal_violation(inst.world, inst.start_state, inst.goal_tiles, inst.goal_cells, 0) is None:
             self.stats["tiles_traveled_optimal"] = True
             return self.result("optimal", np.zeros((inst.num_robots, 0), dtype=np.int64), lower=0)
-        self._find_incumbent()
+        if self._find_incumbent():  # the complete planner's proof: no reachable state is a goal
+            self.stats["reason"] = EXHAUSTED
+            return self.result("infeasible")
         return self._cpsat() if self.method == "cpsat" else self._sat()
 
     # ---- lazy connectivity ------------------------------------------------------------------

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from bille.heuristics import lacam, lacam_states, reconfigure, temporal_astar
-from bille.instances import Instance
+from bille.instances import Instance, OptionError
 from bille.instances.metrics import metrics
 from bille.instances.schedule import Schedule, bind
 
@@ -28,6 +28,7 @@ PATH_PLANNING = (("lacam", 0.5), ("temporal-astar", 0.5))
 RECONFIGURATION = tuple((motion, transfer, sequence) for sequence in ("given", "derived")
                         for motion in ("temporal-astar", "lacam", "mstar") for transfer in (False, True))
 RUN_SHARE = 0.25  # of the budget, at most, for one run of the loop
+EXHAUSTED = "the complete planner exhausted the reachable states"  # stats.reason of that proof
 
 
 @dataclass
@@ -87,6 +88,26 @@ def compacted(instance: Instance, found: Incumbent, time_limit: float) -> Incumb
     if ids.shape[1] >= found.makespan:
         return found
     return from_schedule(instance, Schedule.from_ids(instance, ids), found.method) or found
+
+
+def to_cap(instance: Instance, given: Schedule | None, deadline: float | None,
+           method: str) -> tuple[Incumbent | None, bool]:
+    """The exact solvers' first schedule, a cap on their horizons and a fallback: the one
+    ``given`` (which must be valid), else the heuristics' in a twentieth of the time left (at
+    most 1 s: refuting an infeasible instance need not wait for heuristics that cannot succeed),
+    else the complete planner's in a tenth. Also whether the complete planner proved that no
+    schedule exists (see :func:`complete_search`)."""
+    if given is not None:
+        found = from_schedule(instance, given, "given")
+        if found is None:
+            raise OptionError(f"{method}: the incumbent schedule is not valid for instance "
+                              f"'{instance.name}' (bille check says why)")
+        return found, False
+    budget = 1.0 if deadline is None else min(1.0, 0.05 * (deadline - time.perf_counter()))
+    found = first_schedule(instance, max(budget, 0.01), improve=False)  # a cap: the proof follows
+    if found is not None or deadline is None:
+        return found, False
+    return complete_search(instance, max(0.01, 0.1 * (deadline - time.perf_counter())))
 
 
 def complete_search(instance: Instance, time_limit: float) -> tuple[Incumbent | None, bool]:

@@ -109,12 +109,16 @@ def test_an_obstacle_wall_is_infeasible(method):
 
 
 @pytest.mark.parametrize("method", ["cpsat", "sat"])
-def test_no_schedule_within_the_horizon_cap_is_no_proof(method):
+def test_no_schedule_within_the_horizon_cap_is_no_proof(method, monkeypatch):
     # an S5 robot on three tiles cannot turn around (breadth-first search proves it); the
     # encodings prove every horizon up to the cap infeasible, which bounds the makespan from
     # below but does not prove that no longer schedule exists
+    from bille.solvers import incumbent
+
     inst = make("TTT\n...", [{"front": [1, 0], "back": [0, 0]}], moveset="S5", robot_goals=[[0, 0]])
     assert solve(inst, "bfs").status == "infeasible"
+    assert solve(inst, method, max_makespan=8, time_limit=120).status == "infeasible"  # the complete planner's proof
+    monkeypatch.setattr(incumbent, "complete_search", lambda *args: (None, False))  # as if it ran out of time
     for threads in ({}, {"threads": 2}) if method == "cpsat" else ({},):
         result = solve(inst, method, max_makespan=8, time_limit=120, **threads)
         assert result.status == "unsolved" and "horizon cap 8" in result.stats["failure"]
@@ -298,13 +302,29 @@ print("ok")
 
 @pytest.mark.parametrize("method", ["cpsat", "sat"])
 def test_with_no_heuristic_schedule_the_incumbent_comes_from_the_complete_planner(monkeypatch, method):
-    from bille.solvers import exact
+    from bille.solvers import incumbent
     from test_lacam import TINY_RECONFIGURATION, brute_force
 
-    monkeypatch.setattr(exact, "first_schedule", lambda *args, **kw: None)
+    monkeypatch.setattr(incumbent, "first_schedule", lambda *args, **kw: None)
     inst = next(i for i in TINY_RECONFIGURATION if brute_force(i.name).status == "optimal"
                 and brute_force(i.name).metrics.makespan >= 4)
     result = solve(inst, method, time_limit=60)
     assert result.stats["incumbent"]["method"] in ("lacam", "lacam-states"), result.stats
     assert result.stats["incumbent"]["makespan"] >= result.metrics.makespan == brute_force(inst.name).metrics.makespan
     assert result.status == "optimal" and validate(inst, result.schedule).valid
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("method", ["cpsat", "sat"])
+def test_an_instance_the_complete_planner_exhausts_is_infeasible_for_the_exact_solvers(method):
+    # no static proof on these, and no schedule up to any horizon cap: the search over whole
+    # states runs out of states, as the brute force does
+    from test_lacam import TINY_RECONFIGURATION, brute_force
+
+    hard = [i for i in TINY_RECONFIGURATION if not lower_bound(i).impossible
+            and brute_force(i.name).status == "infeasible"][:3]
+    assert len(hard) == 3
+    for inst in hard:
+        result = solve(inst, method, time_limit=60)
+        assert result.status == "infeasible" and result.schedule is None and result.lower_bound is None
+        assert result.stats["reason"] == "the complete planner exhausted the reachable states"
