@@ -14,9 +14,9 @@ from pysat.solvers import Solver
 
 from bille.instances.limits import address_room
 
+from . import SAT, UNKNOWN, UNSAT
 from .model import Model
 
-SAT, UNSAT, UNKNOWN = "sat", "unsat", "unknown"
 BUDGET = 2_000  # conflicts per call between clock checks
 # address space a timer thread needs (its stack, and the malloc arena glibc gives a new thread):
 # with less room under an address-space limit, starting one can fail, or hang in

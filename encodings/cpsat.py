@@ -7,9 +7,8 @@ import time
 
 from ortools.sat.python import cp_model
 
+from . import SAT, UNKNOWN, UNSAT
 from .model import Model, OutOfTime
-
-SAT, UNSAT, UNKNOWN = "sat", "unsat", "unknown"
 
 
 def _lits(clause) -> list[int]:

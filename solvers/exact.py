@@ -27,6 +27,7 @@ from typing import Callable
 
 import numpy as np
 
+from bille.encodings import SAT, UNKNOWN, UNSAT
 from bille.encodings.cnf import SOLVERS, SatBackend
 from bille.encodings.connectivity import connectivity_cuts, separator_cuts
 from bille.encodings.cpsat import CpSatBackend
@@ -40,8 +41,6 @@ from bille.instances.schedule import Schedule
 from .bounds import Bounds, lower_bound
 from .incumbent import EXHAUSTED, to_cap
 from .lanes import Lanes
-
-SAT, UNSAT, UNKNOWN = "sat", "unsat", "unknown"
 
 
 def default_cap(lower: int) -> int:

@@ -14,11 +14,10 @@ import threading
 import time
 from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 
+from bille.encodings import SAT, UNKNOWN, UNSAT
 from bille.encodings.cpsat import CpSatBackend
 from bille.encodings.model import OutOfTime, build
 from bille.encodings.solution import decode
-
-SAT, UNSAT, UNKNOWN = "sat", "unsat", "unknown"
 
 
 class Lanes:
