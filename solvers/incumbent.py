@@ -73,11 +73,9 @@ def first_schedule(instance: Instance, budget: float, improve: bool = True) -> I
         found = _run(instance, how, max(0.01, min(left, share * budget)), improve)
         if found is None or found.schedule is None:
             continue
-        candidate = from_schedule(instance, found.schedule, name)
-        if candidate is not None:
-            candidate = compacted(instance, candidate, max(0.01, min(0.5, 0.1 * budget)))
-            if best is None or candidate.makespan < best.makespan:
-                best = candidate
+        candidate = _compacted_result(instance, found, name, max(0.01, min(0.5, 0.1 * budget)))
+        if candidate is not None and (best is None or candidate.makespan < best.makespan):
+            best = candidate
     return best
 
 
@@ -119,21 +117,24 @@ def complete_search(instance: Instance, time_limit: float) -> tuple[Incumbent | 
     robots may move tiles aside).
     """
     end = time.perf_counter() + time_limit
+    compact_s = max(0.05, min(2.0, 0.1 * time_limit))  # its schedules are mostly waits
     if not instance.is_reconfiguration:
         found = lacam.plan(instance, time_limit=time_limit, improve=0.0)
         if found.schedule is not None:
-            return _compacted_result(instance, found, "lacam", time_limit), False
+            return _compacted_result(instance, found, "lacam", compact_s), False
     if instance.collisions == "classic" or time.perf_counter() >= end:
         return None, False
     found = lacam_states.plan(instance, time_limit=end - time.perf_counter())
     if found.schedule is not None:
-        return _compacted_result(instance, found, "lacam-states", time_limit), False
+        return _compacted_result(instance, found, "lacam-states", compact_s), False
     return None, found.status == "infeasible"
 
 
-def _compacted_result(instance: Instance, found, method: str, time_limit: float) -> Incumbent | None:
+def _compacted_result(instance: Instance, found, method: str, seconds: float) -> Incumbent | None:
+    """A planner's result as a compacted incumbent (:func:`compacted`, for ``seconds``), or None if
+    its schedule is not valid."""
     candidate = from_schedule(instance, found.schedule, method)
-    return candidate and compacted(instance, candidate, max(0.05, min(2.0, 0.1 * time_limit)))
+    return candidate and compacted(instance, candidate, seconds)
 
 
 def _run(instance: Instance, how, limit: float, improve: bool):
