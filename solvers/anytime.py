@@ -23,14 +23,18 @@ bound in turn, until they meet (``optimal``) or the time runs out (``feasible``,
      the validator all the same. The last window ends at the goal instead of the state at ``b``
      (robots end anywhere the goal allows). A window proved not to shorten is not tried again
      on the same schedule; when every window of the current length is, the length grows by half,
-     up to the whole schedule (which is then the exact search capped below the incumbent).
+     up to the whole schedule. That window is the exact search at horizon ``makespan - 1``
+     from the start to the goal: proved infeasible, it is a lower bound of its own, equal to the
+     makespan, and the run ends ``optimal`` (``windows.proved_bound``), from the top while the
+     bound search climbs from below.
 
 Robots subsets as neighbourhoods (fix the other robots' paths) cannot shorten a makespan unless the
 robots they leave out already finish early, so only time windows are searched.
 
 ``stats``: ``first`` (method, makespan, seconds), ``improvements`` ([seconds, makespan] for every
 shorter schedule), ``lower_bounds`` ([seconds, bound] for every rise), ``windows`` (tried,
-shortened, proved not to shorten, undecided), and the seconds spent on each search.
+shortened, proved not to shorten, undecided; ``proved_bound`` where the whole schedule's window
+proved it optimal), and the seconds spent on each search.
 """
 from __future__ import annotations
 
@@ -168,9 +172,7 @@ class _Anytime:
                 if self.best is None and not self.closed():
                     seek.step()
                     continue
-                if self.closed() or windows.exhausted:
-                    if background and not self.closed():
-                        rise.wait(min(self.end, time.perf_counter() + self.slice))
+                if self.closed():
                     continue
                 began = time.perf_counter()
                 windows.step(min(self.end, began + self.slice))
@@ -276,9 +278,6 @@ class _Rise:
             run.raise_lower(self.k + 1)
             self.close()
             self.k = max(self.k + 1, run.lower)
-
-    def wait(self, until: float) -> None:
-        self.step(until)
 
     def close(self) -> None:
         if isinstance(self.backend, SatBackend):

@@ -41,7 +41,6 @@ class Windows:
         self.length = run.window
         self.done: set = set()  # (schedule key, a, b) proved not to shorten
         self.cursor = 0
-        self.exhausted = False  # every window of the best schedule, itself included, proved
         self.budget = run.slice  # seconds per window: grows by half after an undecided one
 
     def windows(self, makespan: int) -> list[tuple[int, int]]:
@@ -57,10 +56,7 @@ class Windows:
             best = run.best
             key = best.ids.tobytes()
             todo = [(a, b) for a, b in self.windows(best.makespan) if (key, a, b) not in self.done]
-            if not todo:
-                if self.length >= best.makespan:
-                    self.exhausted = True  # the whole schedule included: only the bound can close
-                    return
+            if not todo:  # every window of this length proved; the whole schedule's closes the run
                 self.length = min(best.makespan, self.length + max(1, self.length // 2))
                 continue
             a, b = todo[self.cursor % len(todo)]
@@ -68,6 +64,11 @@ class Windows:
             status = self.shorten(best, a, b, min(run.end, time.perf_counter() + self.budget))
             if status == UNSAT:
                 self.done.add((key, a, b))
+                if a == 0 and b == best.makespan:
+                    # the whole schedule: from the start to the goal in fewer steps is the full
+                    # model at horizon makespan - 1, infeasible, so no schedule is shorter
+                    run.stats["windows"]["proved_bound"] = best.makespan
+                    run.raise_lower(best.makespan)
             elif status == UNKNOWN:
                 self.budget *= 1.5
 

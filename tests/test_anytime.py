@@ -50,6 +50,21 @@ def test_anytime_proves_the_brute_force_optimum(k, parallel, bound_solver):
     assert seen and all(e["lower"] <= optimum for e in seen)
 
 
+@pytest.mark.parametrize("k", range(3))
+def test_the_whole_schedules_window_proves_the_optimum_without_the_bound_search(monkeypatch, k):
+    """With the bound search switched off, only the windows can raise the bound: the window that
+    spans the whole schedule is the exact search one step below it, so its proof is the optimum."""
+    monkeypatch.setattr(anytime._Rise, "step", lambda self, until: None)
+    below = [inst for inst in SOLVABLE if anytime.lower_bound(inst).lower < OPTIMA[inst]]
+    inst = below[k]
+    optimum = OPTIMA[inst]
+    result = solve(inst, "anytime", time_limit=30, parallel=False)
+    assert validate(inst, result.schedule).valid
+    assert result.status == "optimal" and result.metrics.makespan == result.lower_bound == optimum
+    assert result.stats["windows"]["proved_bound"] == optimum
+    _monotone(result.stats, optimum)
+
+
 def _padded(inst, schedule, waits):
     """The schedule with ``waits`` joint waits inserted after its first step."""
     ids = bind(inst, schedule)
