@@ -192,3 +192,25 @@ def test_whole_state_search_improves_to_the_brute_force_optimum(inst):
     assert gains == sorted(gains, reverse=True)  # anytime: never worse
     if result.status == "optimal":  # the space was exhausted: the claim is a proof
         assert steps.metrics.makespan == best.metrics.makespan
+
+
+def test_a_loop_out_of_its_share_of_the_time_hands_over_to_the_complete_search(monkeypatch):
+    """The loop gets part of the time limit; when it runs out of it (its motion layer finds no
+    joint plan), the whole-state search still gets the rest and finds the schedule."""
+    from bille.instances.result import Result
+    from bille.solvers import registry
+
+    given = []
+
+    def stuck(instance, *, time_limit=None, **kw):
+        given.append(time_limit)
+        return Result("lacam", "timeout", stats={"failure": "LaCAM* found no joint plan (timeout)"})
+
+    monkeypatch.setattr(registry.reconfigure, "plan", stuck)
+    name = next(i.name for i in TINY_RECONFIGURATION if brute_force(i.name).status == "optimal")
+    inst = next(i for i in TINY_RECONFIGURATION if i.name == name)
+    result = solve(inst, "lacam", time_limit=20, improve=0.0)
+    assert given == [registry.LOOP_SHARE * 20] and registry.LOOP_SHARE < 1
+    assert result.status == "feasible" and validate(inst, result.schedule).valid
+    assert result.metrics.makespan >= brute_force(name).metrics.makespan
+    assert result.stats["loop"]["status"] == "timeout"
