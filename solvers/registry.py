@@ -63,8 +63,9 @@ def plan_lacam(instance: Instance, *, objective: str = "makespan", time_limit: f
     ``max_steps`` as for the loop), and where the loop gives up, or runs out of its share of the
     time limit (:data:`LOOP_SHARE`), LaCAM* over whole states (:mod:`bille.heuristics.lacam_states`)
     with the time left: complete, so the method finds a schedule whenever one exists (time and
-    memory permitting) and proves ``infeasible`` when its space is exhausted. ``objective`` is for path planning; ``improve``, ``max_nodes`` and
-    ``seed`` for the searches over configurations."""
+    memory permitting) and proves ``infeasible`` when its space is exhausted. ``objective`` is
+    for path planning; ``improve``, ``max_nodes`` and ``seed`` for the searches over
+    configurations."""
     if not instance.is_reconfiguration:
         return lacam.plan(instance, objective=objective, time_limit=time_limit, improve=improve,
                           max_nodes=max_nodes, seed=seed)
