@@ -25,8 +25,9 @@ bound in turn, until they meet (``optimal``) or the time runs out (``feasible``,
      on the same schedule; when every window of the current length is, the length grows by half,
      up to the whole schedule. That window is the exact search at horizon ``makespan - 1``
      from the start to the goal: proved infeasible, it is a lower bound of its own, equal to the
-     makespan, and the run ends ``optimal`` (``windows.proved_bound``), from the top while the
-     bound search climbs from below.
+     makespan, and so is the shortest schedule it finds when it proves that none is shorter; the
+     run ends ``optimal`` (``windows.proved_bound``), proved from the top while the bound search
+     climbs from below.
 
 Robots subsets as neighbourhoods (fix the other robots' paths) cannot shorten a makespan unless the
 robots they leave out already finish early, so only time windows are searched.

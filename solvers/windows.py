@@ -64,13 +64,15 @@ class Windows:
             status = self.shorten(best, a, b, min(run.end, time.perf_counter() + self.budget))
             if status == UNSAT:
                 self.done.add((key, a, b))
-                if a == 0 and b == best.makespan:
-                    # the whole schedule: from the start to the goal in fewer steps is the full
-                    # model at horizon makespan - 1, infeasible, so no schedule is shorter
-                    run.stats["windows"]["proved_bound"] = best.makespan
-                    run.raise_lower(best.makespan)
             elif status == UNKNOWN:
                 self.budget *= 1.5
+
+    def _proved(self, bound: int) -> str:
+        """The window over the whole schedule is the exact search from the start to the goal: no
+        schedule shorter than ``bound`` in it means none at all, a lower bound of its own."""
+        self.run.stats["windows"]["proved_bound"] = bound
+        self.run.raise_lower(bound)
+        return UNSAT
 
     def shorten(self, best: Incumbent, a: int, b: int, until: float) -> str:
         run, inst = self.run, self.run.instance
@@ -84,8 +86,9 @@ class Windows:
             sub = dataclasses.replace(sub, goal=Grid.from_masks(inst.width, inst.height, inst.start.obstacles,
                                                                 end.tiles))
         L = b - a - 1
+        whole = a == 0 and b == best.makespan
         if L < 1:
-            return UNSAT
+            return self._proved(best.makespan) if whole else UNSAT
         try:
             model = build(sub, L, Options(), min_done=1, deadline=until, end=end, swap=run.swap)
         except OutOfTime:
@@ -97,8 +100,10 @@ class Windows:
             found = _shortest_sat(model, sub, L, until, run.solver)
         if isinstance(found, str):
             counts["undecided" if found == UNKNOWN else "not_shorter"] += 1
-            return found
-        k, part, roles = found
+            return self._proved(best.makespan) if found == UNSAT and whole else found
+        k, part, roles, shortest = found
+        if shortest and whole:
+            self._proved(k)
         # robot i goes on with the rest of the schedule of the robot whose end state it took
         ids = np.concatenate([best.ids[:, :a], part[:, :k], best.ids[roles, b:]], axis=1)
         spliced = from_schedule(inst, Schedule.from_ids(inst, ids), "anytime")
@@ -110,8 +115,9 @@ class Windows:
 
 def _shortest_sat(model, sub: Instance, L: int, until: float, solver: str):
     """The window's shortest part with a python-sat solver: ``done[L]`` assumed, then ``done[k -
-    1]`` while ``done[k]`` is satisfiable. Returns ``(k, part, roles)`` for the shortest part
-    found, else ``unsat`` or ``unknown``."""
+    1]`` while ``done[k]`` is satisfiable. Returns ``(k, part, roles, shortest)`` for the shortest
+    part found (``shortest``: none has fewer steps, ``done[k - 1]`` was refuted), else ``unsat``
+    or ``unknown``."""
     backend = SatBackend(model, solver)
     try:
         status = solve_with_cuts(backend, model, sub, [model.done[L]], until)
@@ -119,10 +125,10 @@ def _shortest_sat(model, sub: Instance, L: int, until: float, solver: str):
             return status
         k = L
         found = _part(model, sub, backend, k)
-        while k > 1 and solve_with_cuts(backend, model, sub, [model.done[k - 1]], until) == SAT:
+        while k > 1 and (status := solve_with_cuts(backend, model, sub, [model.done[k - 1]], until)) == SAT:
             k -= 1
             found = _part(model, sub, backend, k)
-        return found
+        return found + (status == UNSAT,)
     finally:
         backend.delete()
 
@@ -130,14 +136,16 @@ def _shortest_sat(model, sub: Instance, L: int, until: float, solver: str):
 def _shortest_cpsat(model, sub: Instance, L: int, until: float):
     """The window's shortest part with one CP-SAT worker: ``done[L]`` required, as many steps
     ``done`` as can be (``done[k]``: every robot waits from step ``k`` on). Returns ``(k, part,
-    roles)`` for the best part found (proved shortest or not), else ``unsat`` or ``unknown``."""
+    roles, shortest)`` for the best part found (``shortest``: proved so), else ``unsat`` or
+    ``unknown``."""
     backend = CpSatBackend(model, 1, presolve=False)
     backend.add_clauses([[model.done[L]]])
     status = backend.solve(max(0.01, until - time.perf_counter()), minimize=[model.done[k] for k in range(1, L + 1)],
                            maximize=True)
     if backend.values is None:
         return status
-    return _part(model, sub, backend, next(k for k in range(1, L + 1) if backend.value(model.done[k])))
+    k = next(k for k in range(1, L + 1) if backend.value(model.done[k]))
+    return _part(model, sub, backend, k) + (status == SAT,)
 
 
 def _part(model, sub: Instance, backend, k: int):

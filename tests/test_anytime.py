@@ -50,15 +50,17 @@ def test_anytime_proves_the_brute_force_optimum(k, parallel, bound_solver):
     assert seen and all(e["lower"] <= optimum for e in seen)
 
 
+@pytest.mark.parametrize("solver", ["minisat22", "cpsat"])
 @pytest.mark.parametrize("k", range(3))
-def test_the_whole_schedules_window_proves_the_optimum_without_the_bound_search(monkeypatch, k):
+def test_the_whole_schedules_window_proves_the_optimum_without_the_bound_search(monkeypatch, k, solver):
     """With the bound search switched off, only the windows can raise the bound: the window that
-    spans the whole schedule is the exact search one step below it, so its proof is the optimum."""
+    spans the whole schedule is the exact search from the start to the goal, so the shortest
+    schedule it proves (or its proof that none is shorter) is the optimum."""
     monkeypatch.setattr(anytime._Rise, "step", lambda self, until: None)
     below = [inst for inst in SOLVABLE if anytime.lower_bound(inst).lower < OPTIMA[inst]]
     inst = below[k]
     optimum = OPTIMA[inst]
-    result = solve(inst, "anytime", time_limit=30, parallel=False)
+    result = solve(inst, "anytime", time_limit=30, parallel=False, solver=solver)
     assert validate(inst, result.schedule).valid
     assert result.status == "optimal" and result.metrics.makespan == result.lower_bound == optimum
     assert result.stats["windows"]["proved_bound"] == optimum
@@ -71,6 +73,21 @@ def _padded(inst, schedule, waits):
     wait = [int(np.flatnonzero(g.kind == Kind.WAIT)[0]) for g in inst.world.graphs]
     pad = np.array([wait] * waits, dtype=np.int64).T
     return Schedule.from_ids(inst, np.concatenate([ids[:, :1], pad, ids[:, 1:]], axis=1))
+
+
+@pytest.mark.parametrize("solver", ["minisat22", "cpsat"])
+def test_the_whole_schedules_window_proves_the_shortest_schedule_it_finds(monkeypatch, solver):
+    """A padded optimal schedule, one window over all of it: the call that finds the optimum also
+    proves that nothing is shorter, so one window closes the run."""
+    monkeypatch.setattr(anytime._Rise, "step", lambda self, until: None)
+    inst = next(inst for inst in SOLVABLE if anytime.lower_bound(inst).lower < OPTIMA[inst])
+    optimal = solve(inst, "sat", minimize_travel=False)
+    padded = _padded(inst, optimal.schedule, 3)
+    result = solve(inst, "anytime", time_limit=30, parallel=False, incumbent=padded, solver=solver, window=64)
+    assert result.status == "optimal" and result.lower_bound == result.metrics.makespan == OPTIMA[inst]
+    assert validate(inst, result.schedule).valid
+    assert result.stats["windows"]["tried"] == 1 and result.stats["windows"]["shortened"] == 1
+    assert result.stats["windows"]["proved_bound"] == OPTIMA[inst]
 
 
 @pytest.mark.slow
