@@ -3,7 +3,8 @@
 The jobs of the reconfiguration sequence (:mod:`.sequence`) are handed out in order: the next
 job goes to the idle robot (no legs, no tile) nearest to its pick by pose-graph distance
 (walking to a pose facing the pick on the current structure; ties to the lower robot id); when
-no idle robot can reach it, allocation waits for the next step.
+no idle robot can reach it, allocation waits for the next step. Only the loop's ``active`` robots
+take jobs.
 """
 from __future__ import annotations
 
@@ -29,7 +30,7 @@ class Allocation:
         poses = self.state.poses
         while self.next_job < len(self.jobs):
             job = self.jobs[self.next_job]
-            idle = [i for i in range(len(poses)) if not self.legs[i] and not self.state.carrying[i]]
+            idle = [i for i in self.active if not self.legs[i] and not self.state.carrying[i]]
             best = None
             for i in idle:
                 d = int(self.walk(i).facing_distances(job.pick)[poses[i]])

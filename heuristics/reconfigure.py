@@ -63,7 +63,8 @@ JOINT = {"mstar": "M*", "lacam": "LaCAM*"}  # the motion layers that follow a ca
 
 def plan(instance: Instance, *, motion: str = "temporal-astar", load_transfer: bool = False, d_tr: int = 5,
          epsilon: float = 1.0, horizon: int = 5, time_limit: float | None = None, max_steps: int | None = None,
-         max_shifts: int | None = None, priorities: list[int] | None = None, method: str | None = None):
+         max_shifts: int | None = None, priorities: list[int] | None = None, active: list[int] | None = None,
+         method: str | None = None):
     """Run the reconfiguration loop (module docstring); returns a
     :class:`~bille.instances.result.Result` named ``method`` (default: ``motion``).
 
@@ -71,12 +72,13 @@ def plan(instance: Instance, *, motion: str = "temporal-astar", load_transfer: b
     (1)-(3); ``epsilon``, ``horizon``, ``priorities`` (the initial ``Q``): as for Temporal A*;
     ``max_steps``: the step bound (default: ten times the summed Manhattan carries plus ``W + H``
     per job, at least 200); ``max_shifts``: priority shifts allowed when going round in circles
-    (default ``4 m^2 + 4 jobs``).
+    (default ``4 m^2 + 4 jobs``); ``active``: the robots that take jobs (default: all); the others
+    only keep out of the way, and one that carries a tile at the start still delivers it.
     """
     try:
         loop = Loop(instance, motion=motion, load_transfer=load_transfer, d_tr=d_tr, epsilon=epsilon,
                     horizon=horizon, time_limit=time_limit, max_steps=max_steps, max_shifts=max_shifts,
-                    priorities=priorities)
+                    priorities=priorities, active=active)
     except NoSequence as exc:  # the loop gives up before its first step
         return to_result(instance, method or motion, "unsolved", None, stats={"failure": str(exc)})
     return loop.run(method or motion)
@@ -88,7 +90,7 @@ class Loop(Allocation, LoadTransfer, Manipulation, Motion):
     def __init__(self, instance: Instance, *, motion: str = "temporal-astar", load_transfer: bool = False,
                  d_tr: int = 5, epsilon: float = 1.0, horizon: int = 5, time_limit: float | None = None,
                  max_steps: int | None = None, max_shifts: int | None = None,
-                 priorities: list[int] | None = None) -> None:
+                 priorities: list[int] | None = None, active: list[int] | None = None) -> None:
         m = instance.num_robots
         if motion not in MOTIONS:
             raise OptionError(f"unknown motion planner '{motion}' (expected one of: {', '.join(MOTIONS)})")
@@ -103,6 +105,12 @@ class Loop(Allocation, LoadTransfer, Manipulation, Motion):
             raise OptionError(f"{motion}: priorities must order the robot ids 0..{m - 1}, got {priorities}")
         if m == 0:
             raise OptionError(f"instance '{instance.name}' has no robots to move its tiles")
+        if isinstance(active, int):
+            active = [active]
+        if active is not None and (not isinstance(active, (list, tuple)) or not active
+                                   or not all(isinstance(i, int) and 0 <= i < m for i in active)):
+            raise OptionError(f"{motion}: active must name some of the robot ids 0..{m - 1}, got {active!r}")
+        self.active = list(range(m)) if active is None else sorted(set(active))
         self.instance, self.world = instance, instance.world
         self.motion, self.load_transfer, self.d_tr = motion, load_transfer, d_tr
         self.epsilon, self.horizon = epsilon, horizon

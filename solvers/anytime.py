@@ -3,7 +3,8 @@ bound in turn, until they meet (``optimal``) or the time runs out (``feasible``,
 
 1. **First schedule**: the one given (``incumbent``), or the shortest the heuristics find in a
    fifth of the time limit (:func:`.incumbent.first_schedule`): milliseconds on most instances.
-   Where they find none, the complete planner (LaCAM* over whole states,
+   Where they find none, the loop with fewer robots taking jobs (:func:`.incumbent.fewer_robots`),
+   and then the complete planner (LaCAM* over whole states,
    :func:`.incumbent.complete_search`) seeks one with the time left; when it exhausts the
    reachable states, no schedule exists and the answer is ``infeasible``.
 2. Then two searches run side by side, the first in a child process on a second core
@@ -55,7 +56,7 @@ from bille.instances.rules import goal_violation
 from bille.instances.schedule import Schedule
 
 from .bounds import Bounds, lower_bound
-from .incumbent import EXHAUSTED, Incumbent, complete_search, first_schedule, from_schedule
+from .incumbent import EXHAUSTED, Incumbent, complete_search, fewer_robots, first_schedule, from_schedule
 from .windows import Windows, solve_with_cuts
 
 try:  # the bound search runs in a forked child process where the platform has fork
@@ -221,23 +222,29 @@ class _Anytime:
 
 
 class _Seek:
-    """No schedule yet: the complete planner (:func:`.incumbent.complete_search`), for a tenth of
-    the time limit (at least 2 s), so that what the bound search found beside it is read soon on
-    small instances, and then once more, from the start, with all the time left: its search is
-    deterministic and heavy-tailed (on a random 10x8 instance with four robots and ten moved tiles,
-    17 s to a schedule with seed 0, 37 and 39 s with seeds 1 and 3, none in 40 s with seed 2), so
-    it is not cut into restarts."""
+    """No schedule yet: the reconfiguration loop with fewer robots taking jobs
+    (:func:`.incumbent.fewer_robots`) for a fifth of the time limit (at least 4 s), then the
+    complete planner (:func:`.incumbent.complete_search`) for a tenth (at least 2 s), so that what the bound
+    search found beside it is read soon on small instances, and then once more, from the start,
+    with all the time left: its search is deterministic and heavy-tailed (on a random 10x8
+    instance with four robots and ten moved tiles, 17 s to a schedule with seed 0, 37 and 39 s
+    with seeds 1 and 3, none in 40 s with seed 2), so it is not cut into restarts."""
 
     def __init__(self, run: _Anytime) -> None:
         self.run, self.infeasible = run, False
         self.limit = max(2.0, 0.1 * (run.end - run.start))
+        self.fewer = True  # the loop with fewer robots is still to be tried, for twice the limit
 
     def step(self) -> None:
         run = self.run
         began = time.perf_counter()
-        found, self.infeasible = complete_search(run.instance, max(0.01, min(self.limit, run.left())))
+        budget = max(0.01, min(self.limit * (2 if self.fewer else 1), run.left()))
+        if self.fewer:
+            found, self.fewer = fewer_robots(run.instance, budget), False
+        else:
+            found, self.infeasible = complete_search(run.instance, budget)
+            self.limit = float("inf")
         run.stats["seek_s"] = round(run.stats.get("seek_s", 0.0) + time.perf_counter() - began, 3)
-        self.limit = float("inf")
         if found is not None:
             run.start_from(found)
 

@@ -7,6 +7,7 @@ a heuristic's mistake can never become a claimed makespan.
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import time
 from dataclasses import dataclass
 
@@ -28,6 +29,10 @@ PATH_PLANNING = (("lacam", 0.5), ("temporal-astar", 0.5))
 RECONFIGURATION = tuple((motion, transfer, sequence) for sequence in ("given", "derived")
                         for motion in ("temporal-astar", "lacam", "mstar") for transfer in (False, True))
 RUN_SHARE = 0.25  # of the budget, at most, for one run of the loop
+# with fewer robots taking jobs (:func:`fewer_robots`): the motion layers in the order they were
+# measured to succeed there (Temporal A* also fails fastest)
+FEWER = (("temporal-astar", True), ("temporal-astar", False), ("lacam", True), ("lacam", False),
+         ("mstar", False), ("mstar", True))
 EXHAUSTED = "the complete planner exhausted the reachable states"  # stats.reason of that proof
 
 
@@ -79,6 +84,41 @@ def first_schedule(instance: Instance, budget: float, improve: bool = True) -> I
     return best
 
 
+def fewer_robots(instance: Instance, budget: float) -> Incumbent | None:
+    """The shortest valid schedule the reconfiguration loop finds within ``budget`` seconds with
+    fewer robots taking jobs (the loop's ``active``; the others only keep out of the way), or
+    None: for when the loop with every robot finds none. On crowded maps the robots with jobs
+    block one another where fewer get through: on a random 10x8 map with 30 tiles, four robots
+    and ten moved tiles (``bille gen random --robots 4 --moved 10 --seed 6``) every run with all
+    four deadlocks or finds no joint plan, while three of them finish in 72 steps in 0.9 s. Sets
+    of ``m - 1`` robots first, then smaller; per size, each motion layer of :data:`FEWER` on
+    every set before the next layer, each run within a quarter of the budget; it stops after the
+    first size that gives a schedule (fewer robots take longer). Each schedule is compacted, as
+    in :func:`first_schedule`."""
+    m = instance.num_robots
+    if not instance.is_reconfiguration or instance.collisions == "classic" or m < 2:
+        return None
+    end = time.perf_counter() + budget
+    best = None
+    for k in range(m - 1, 0, -1):
+        for motion, transfer in FEWER:
+            for active in itertools.combinations(range(m), k):
+                left = end - time.perf_counter()
+                if left <= 0:
+                    return best
+                found = reconfigure.plan(instance, motion=motion, load_transfer=transfer, active=list(active),
+                                         time_limit=max(0.01, min(left, RUN_SHARE * budget)), method=motion)
+                if found.schedule is None:
+                    continue
+                name = f"{motion}{'+transfer' if transfer else ''}+robots{','.join(map(str, active))}"
+                candidate = _compacted_result(instance, found, name, max(0.01, min(0.5, 0.1 * budget)))
+                if candidate is not None and (best is None or candidate.makespan < best.makespan):
+                    best = candidate
+        if best is not None:
+            return best
+    return best
+
+
 def compacted(instance: Instance, found: Incumbent, time_limit: float) -> Incumbent:
     """``found`` with its actions as early as they go (:mod:`.compact`), if that is shorter and
     valid."""
@@ -93,7 +133,8 @@ def to_cap(instance: Instance, given: Schedule | None, deadline: float | None,
     """The exact solvers' first schedule, a cap on their horizons and a fallback: the one
     ``given`` (which must be valid), else the heuristics' in a twentieth of the time left (at
     most 1 s: refuting an infeasible instance need not wait for heuristics that cannot succeed),
-    else the complete planner's in a tenth. Also whether the complete planner proved that no
+    else the loop's with fewer robots (:func:`fewer_robots`) in as long, else the complete
+    planner's in a tenth. Also whether the complete planner proved that no
     schedule exists (see :func:`complete_search`)."""
     if given is not None:
         found = from_schedule(instance, given, "given")
@@ -103,6 +144,7 @@ def to_cap(instance: Instance, given: Schedule | None, deadline: float | None,
         return found, False
     budget = 1.0 if deadline is None else min(1.0, 0.05 * (deadline - time.perf_counter()))
     found = first_schedule(instance, max(budget, 0.01), improve=False)  # a cap: the proof follows
+    found = found or fewer_robots(instance, max(budget, 0.01))
     if found is not None or deadline is None:
         return found, False
     return complete_search(instance, max(0.01, 0.1 * (deadline - time.perf_counter())))

@@ -21,16 +21,17 @@ def plan_temporal_astar(instance: Instance, *, epsilon: float = 1.0, horizon: in
                         time_limit: float | None = None, max_steps: int | None = None,
                         max_shifts: int | None = None, shift_priorities: bool = True,
                         priorities: list[int] | None = None, load_transfer: bool = False,
-                        d_tr: int = 5) -> Result:
+                        d_tr: int = 5, active: list[int] | None = None) -> Result:
     """Temporal A* (:func:`bille.heuristics.temporal_astar.plan`); on an instance that moves tiles,
     the reconfiguration loop with Temporal A* as its motion layer (``load_transfer``, ``d_tr``:
-    equations (1)-(3) of the paper)."""
+    equations (1)-(3) of the paper; ``active``: the robots that take jobs)."""
     if instance.is_reconfiguration:
         if not shift_priorities:
             raise OptionError("temporal-astar: shift_priorities=false is for path planning only")
         return reconfigure.plan(instance, motion="temporal-astar", load_transfer=load_transfer, d_tr=d_tr,
                                 epsilon=epsilon, horizon=horizon, time_limit=time_limit, max_steps=max_steps,
-                                max_shifts=max_shifts, priorities=priorities)
+                                max_shifts=max_shifts, priorities=priorities, active=active)
+    _loop_only("temporal-astar", active=active)
     return temporal_astar.plan(instance, epsilon=epsilon, horizon=horizon, time_limit=time_limit,
                                max_steps=max_steps, max_shifts=max_shifts, shift_priorities=shift_priorities,
                                priorities=priorities)
@@ -38,13 +39,14 @@ def plan_temporal_astar(instance: Instance, *, epsilon: float = 1.0, horizon: in
 
 def plan_mstar(instance: Instance, *, epsilon: float = 1.0, od: bool = True, time_limit: float | None = None,
                max_expansions: int = 5_000_000, load_transfer: bool = False, d_tr: int = 5,
-               max_steps: int | None = None) -> Result:
+               max_steps: int | None = None, active: list[int] | None = None) -> Result:
     """M* (:func:`bille.heuristics.mstar.plan`); on an instance that moves tiles, the
-    reconfiguration loop with M* as its motion layer (``load_transfer``, ``d_tr``, ``max_steps``
-    as for the loop)."""
+    reconfiguration loop with M* as its motion layer (``load_transfer``, ``d_tr``, ``max_steps``,
+    ``active`` as for the loop)."""
     if instance.is_reconfiguration:
         return reconfigure.plan(instance, motion="mstar", load_transfer=load_transfer, d_tr=d_tr, epsilon=epsilon,
-                                time_limit=time_limit, max_steps=max_steps)
+                                time_limit=time_limit, max_steps=max_steps, active=active)
+    _loop_only("mstar", active=active)
     return mstar.plan(instance, epsilon=epsilon, od=od, time_limit=time_limit, max_expansions=max_expansions)
 
 
@@ -57,16 +59,17 @@ LOOP_SHARE = 0.5
 
 def plan_lacam(instance: Instance, *, objective: str = "makespan", time_limit: float | None = None,
                improve: float = 1.0, max_nodes: int = 2_000_000, seed: int = 0, load_transfer: bool = False,
-               d_tr: int = 5, max_steps: int | None = None) -> Result:
+               d_tr: int = 5, max_steps: int | None = None, active: list[int] | None = None) -> Result:
     """LaCAM* (:func:`bille.heuristics.lacam.plan`). On an instance that moves tiles, the
     reconfiguration loop with LaCAM* as its motion layer (``load_transfer``, ``d_tr``,
-    ``max_steps`` as for the loop), and where the loop gives up, or runs out of its share of the
-    time limit (:data:`LOOP_SHARE`), LaCAM* over whole states (:mod:`bille.heuristics.lacam_states`)
-    with the time left: complete, so the method finds a schedule whenever one exists (time and
-    memory permitting) and proves ``infeasible`` when its space is exhausted. ``objective`` is
-    for path planning; ``improve``, ``max_nodes`` and ``seed`` for the searches over
-    configurations."""
+    ``max_steps``, ``active`` as for the loop), and where the loop gives up, or runs out of its
+    share of the time limit (:data:`LOOP_SHARE`), LaCAM* over whole states (every robot taking
+    jobs; :mod:`bille.heuristics.lacam_states`) with the time left: complete, so the method
+    finds a schedule whenever one exists (time and memory permitting) and proves ``infeasible``
+    when its space is exhausted. ``objective`` is for path planning; ``improve``, ``max_nodes``
+    and ``seed`` for the searches over configurations."""
     if not instance.is_reconfiguration:
+        _loop_only("lacam", active=active)
         return lacam.plan(instance, objective=objective, time_limit=time_limit, improve=improve,
                           max_nodes=max_nodes, seed=seed)
     if instance.collisions == "classic":
@@ -78,7 +81,7 @@ def plan_lacam(instance: Instance, *, objective: str = "makespan", time_limit: f
     start = time.perf_counter()
     share = None if time_limit is None else LOOP_SHARE * time_limit
     loop = reconfigure.plan(instance, motion="lacam", load_transfer=load_transfer, d_tr=d_tr,
-                            time_limit=share, max_steps=max_steps, method="lacam")
+                            time_limit=share, max_steps=max_steps, active=active, method="lacam")
     if loop.status not in ("unsolved", "timeout"):
         return loop
     left = None if time_limit is None else time_limit - (time.perf_counter() - start)
@@ -88,6 +91,13 @@ def plan_lacam(instance: Instance, *, objective: str = "makespan", time_limit: f
     whole.stats["loop"] = {"status": loop.status, "failure": loop.stats.get("failure"),
                            "steps": loop.stats.get("steps", 0)}
     return whole
+
+
+def _loop_only(method: str, **options) -> None:
+    """Options of the reconfiguration loop given for path planning: one clear error."""
+    for name, value in options.items():
+        if value is not None:
+            raise OptionError(f"{method}: {name} is for instances that move tiles (the reconfiguration loop)")
 
 
 CLASSIC = ("astar", "lacam", "bfs")  # the methods that plan under classic collisions (DESIGN §3)

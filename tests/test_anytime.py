@@ -116,12 +116,24 @@ def test_an_impossible_instance_is_infeasible_with_no_bound():
 
 def test_with_no_schedule_from_the_heuristics_the_complete_planner_gives_one(monkeypatch):
     monkeypatch.setattr(anytime, "first_schedule", lambda *args, **kw: None)
+    monkeypatch.setattr(anytime, "fewer_robots", lambda *args, **kw: None)
     monkeypatch.setattr(anytime._Rise, "step", lambda self, until: None)  # no bound search
     inst = SOLVABLE[0]
     result = solve(inst, "anytime", time_limit=2, parallel=False)
     assert result.stats["first"]["method"] in ("lacam", "lacam-states"), result.stats
     assert validate(inst, result.schedule).valid
     assert result.metrics.makespan >= OPTIMA[inst]
+    _monotone(result.stats, result.stats["first"]["makespan"])
+
+
+def test_with_no_schedule_from_every_robot_the_loop_with_fewer_gives_one(monkeypatch):
+    monkeypatch.setattr(anytime, "first_schedule", lambda *args, **kw: None)
+    monkeypatch.setattr(anytime._Rise, "step", lambda self, until: None)  # no bound search
+    monkeypatch.setattr(anytime, "complete_search", lambda *args, **kw: pytest.fail("not needed"))
+    inst = load_instance(bundled_path("reconfig-30"))
+    result = solve(inst, "anytime", time_limit=5, parallel=False)
+    assert "+robots" in result.stats["first"]["method"], result.stats
+    assert validate(inst, result.schedule).valid
     _monotone(result.stats, result.stats["first"]["makespan"])
 
 

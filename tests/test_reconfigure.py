@@ -6,12 +6,13 @@ import pytest
 
 from bille.heuristics.reconfigure import Leg, Loop, plan
 from bille.heuristics.sequence import NoSequence, SequenceError, check, derive, sequence_of
-from bille.instances import instance_from_text, load_instance
+from bille.instances import OptionError, instance_from_text, load_instance
 from bille.instances.bundled import bundled_path
 from bille.instances.generators.random import random_reconfiguration
 from bille.instances.grid import is_connected
 from bille.instances.moveset import Kind
 from bille.instances.rules import State
+from bille.instances.schedule import Schedule, bind
 from bille.solvers import solve, validate
 from helpers import make
 from bille.tools.cli import main
@@ -306,3 +307,51 @@ def test_the_sequence_search_reaches_random_instances_with_ten_moved_tiles():
     inst = random_reconfiguration(10, 8, 30, 4, 10, seed=2)
     jobs = derive(inst)  # checked inside: a valid sequence, ending in the goal's tiles
     assert len(jobs) >= 10
+
+
+# ---- fewer robots taking jobs ------------------------------------------------------------------
+
+def _manipulators(inst, schedule) -> set[int]:
+    ids = bind(inst, schedule)
+    return {i for i, row in enumerate(ids.tolist())
+            if any(inst.movesets[i].actions[a].kind in (Kind.PICK, Kind.PLACE) for a in row)}
+
+
+@pytest.mark.parametrize("motion", ["temporal-astar", "mstar", "lacam"])
+@pytest.mark.parametrize("name", ["corridor-2", "reconfig-30"])
+def test_only_the_active_robots_take_jobs(motion, name):
+    inst = bundled(name)  # on corridor-2 robot 1 carries a tile at the start: it delivers it anyway
+    carriers = {i for i, r in enumerate(inst.robots) if r.carrying}
+    for active in ([0], [1]):
+        result = plan(inst, motion=motion, active=active, time_limit=30)
+        assert result.status == "feasible", result.stats
+        assert validate(inst, result.schedule).valid
+        picking = _manipulators(inst, result.schedule)
+        assert picking <= set(active) | carriers
+        if not carriers:  # every job went to the active robot
+            assert picking == set(active)
+
+
+def test_active_names_robots_of_the_instance():
+    inst = bundled("corridor-2")
+    for active in ([2], [], [-1]):
+        with pytest.raises(OptionError, match="active must name"):
+            plan(inst, active=active)
+    with pytest.raises(OptionError, match="active is for instances that move tiles"):
+        solve(bundled("compare-2"), "temporal-astar", active=[0])
+
+
+@pytest.mark.slow
+def test_where_every_robot_blocks_the_others_fewer_robots_finish():
+    # four robots on a crowded random map: the loop with all four deadlocks; three get through
+    from bille.solvers.incumbent import fewer_robots
+
+    inst = random_reconfiguration(10, 8, 30, 4, 10, seed=6)
+    for transfer in (False, True):
+        assert plan(inst, load_transfer=transfer, time_limit=10).status == "unsolved"
+    found = fewer_robots(inst, 10.0)
+    assert found is not None and "+robots" in found.method
+    schedule = Schedule.from_ids(inst, found.ids)
+    report = validate(inst, schedule)
+    assert report.valid and report.metrics.makespan == found.makespan
+    assert len(_manipulators(inst, schedule)) < inst.num_robots
