@@ -126,6 +126,7 @@ def test_with_no_schedule_from_the_heuristics_the_complete_planner_gives_one(mon
     _monotone(result.stats, result.stats["first"]["makespan"])
 
 
+@pytest.mark.slow
 def test_with_no_schedule_from_every_robot_the_loop_with_fewer_gives_one(monkeypatch):
     monkeypatch.setattr(anytime, "first_schedule", lambda *args, **kw: None)
     monkeypatch.setattr(anytime._Rise, "step", lambda self, until: None)  # no bound search
