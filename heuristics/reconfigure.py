@@ -105,10 +105,10 @@ class Loop(Allocation, LoadTransfer, Manipulation, Motion):
             raise OptionError(f"{motion}: priorities must order the robot ids 0..{m - 1}, got {priorities}")
         if m == 0:
             raise OptionError(f"instance '{instance.name}' has no robots to move its tiles")
-        if isinstance(active, int):
+        if isinstance(active, int) and not isinstance(active, bool):
             active = [active]
-        if active is not None and (not isinstance(active, (list, tuple)) or not active
-                                   or not all(isinstance(i, int) and 0 <= i < m for i in active)):
+        if active is not None and (not isinstance(active, (list, tuple)) or not active or not all(
+                isinstance(i, int) and not isinstance(i, bool) and 0 <= i < m for i in active)):
             raise OptionError(f"{motion}: active must name some of the robot ids 0..{m - 1}, got {active!r}")
         self.active = list(range(m)) if active is None else sorted(set(active))
         self.instance, self.world = instance, instance.world

@@ -224,9 +224,9 @@ class _Anytime:
 class _Seek:
     """No schedule yet: the reconfiguration loop with fewer robots taking jobs
     (:func:`.incumbent.fewer_robots`) for a fifth of the time limit (at least 4 s), then the
-    complete planner (:func:`.incumbent.complete_search`) for a tenth (at least 2 s), so that what the bound
-    search found beside it is read soon on small instances, and then once more, from the start,
-    with all the time left: its search is deterministic and heavy-tailed (on a random 10x8
+    complete planner (:func:`.incumbent.complete_search`) for a tenth (at least 2 s), so that
+    what the bound search found beside it is read soon on small instances, and then once more,
+    from the start, with all the time left: its search is deterministic and heavy-tailed (on a random 10x8
     instance with four robots and ten moved tiles, 17 s to a schedule with seed 0, 37 and 39 s
     with seeds 1 and 3, none in 40 s with seed 2), so it is not cut into restarts."""
 

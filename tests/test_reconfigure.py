@@ -334,7 +334,7 @@ def test_only_the_active_robots_take_jobs(motion, name):
 
 def test_active_names_robots_of_the_instance():
     inst = bundled("corridor-2")
-    for active in ([2], [], [-1]):
+    for active in ([2], [], [-1], [True], "0,1"):
         with pytest.raises(OptionError, match="active must name"):
             plan(inst, active=active)
     with pytest.raises(OptionError, match="active is for instances that move tiles"):
