@@ -64,24 +64,12 @@ def first_schedule(instance: Instance, budget: float, improve: bool = True) -> I
     budget. Each schedule is compacted (:mod:`.compact`) before they are compared (bridge-3:
     LaCAM*'s loop 70 steps, compacted 50).
     """
-    end = time.perf_counter() + budget
-    best = None
     if instance.is_reconfiguration:
-        runs = [(f"{m}{'+transfer' if t else ''}{'' if s == 'given' else '+derived'}", (m, t, s), RUN_SHARE)
+        runs = [(f"{m}{'+transfer' if t else ''}{'' if s == 'given' else '+derived'}", (m, t, s, None), RUN_SHARE)
                 for m, t, s in RECONFIGURATION if s == "given" or instance.tasks is not None]
     else:
         runs = [(m, m, share) for m, share in PATH_PLANNING]
-    for name, how, share in runs:
-        left = end - time.perf_counter()
-        if left <= 0:
-            break
-        found = _run(instance, how, max(0.01, min(left, share * budget)), improve)
-        if found is None or found.schedule is None:
-            continue
-        candidate = _compacted_result(instance, found, name, max(0.01, min(0.5, 0.1 * budget)))
-        if candidate is not None and (best is None or candidate.makespan < best.makespan):
-            best = candidate
-    return best
+    return _portfolio(instance, runs, budget, improve)
 
 
 def fewer_robots(instance: Instance, budget: float) -> Incumbent | None:
@@ -99,22 +87,11 @@ def fewer_robots(instance: Instance, budget: float) -> Incumbent | None:
     m = instance.num_robots
     if not instance.is_reconfiguration or instance.collisions == "classic" or m < 2:
         return None
-    end = time.perf_counter() + budget
-    for k in range(m - 1, 0, -1):
-        for motion, transfer in FEWER:
-            for active in itertools.combinations(range(m), k):
-                left = end - time.perf_counter()
-                if left <= 0:
-                    return None
-                found = reconfigure.plan(instance, motion=motion, load_transfer=transfer, active=list(active),
-                                         time_limit=max(0.01, min(left, RUN_SHARE * budget)), method=motion)
-                if found.schedule is None:
-                    continue
-                name = f"{motion}{'+transfer' if transfer else ''}+robots{','.join(map(str, active))}"
-                found = _compacted_result(instance, found, name, max(0.01, min(0.5, 0.1 * budget)))
-                if found is not None:
-                    return found
-    return None
+    runs = ((f"{motion}{'+transfer' if transfer else ''}+robots{','.join(map(str, active))}",
+             (motion, transfer, "given", list(active)), RUN_SHARE)
+            for k in range(m - 1, 0, -1) for motion, transfer in FEWER
+            for active in itertools.combinations(range(m), k))
+    return _portfolio(instance, runs, budget, improve=False, first=True)
 
 
 def compacted(instance: Instance, found: Incumbent, time_limit: float) -> Incumbent:
@@ -177,14 +154,35 @@ def _compacted_result(instance: Instance, found, method: str, seconds: float) ->
     return candidate and compacted(instance, candidate, seconds)
 
 
+def _portfolio(instance: Instance, runs, budget: float, improve: bool, first: bool = False) -> Incumbent | None:
+    """The shortest valid schedule (the first one, if ``first``) of the ``runs`` (name, what to
+    run for :func:`_run`, share of the budget) within ``budget`` seconds, each compacted."""
+    end = time.perf_counter() + budget
+    best = None
+    for name, how, share in runs:
+        left = end - time.perf_counter()
+        if left <= 0:
+            break
+        found = _run(instance, how, max(0.01, min(left, share * budget)), improve)
+        if found is None or found.schedule is None:
+            continue
+        candidate = _compacted_result(instance, found, name, max(0.01, min(0.5, 0.1 * budget)))
+        if candidate is not None and (best is None or candidate.makespan < best.makespan):
+            best = candidate
+            if first:
+                break
+    return best
+
+
 def _run(instance: Instance, how, limit: float, improve: bool):
     if instance.is_reconfiguration:
         if instance.collisions == "classic":
             return None
-        motion, transfer, sequence = how
+        motion, transfer, sequence, active = how
         if sequence == "derived":
             instance = dataclasses.replace(instance, tasks=None)
-        return reconfigure.plan(instance, motion=motion, load_transfer=transfer, time_limit=limit, method=motion)
+        return reconfigure.plan(instance, motion=motion, load_transfer=transfer, active=active, time_limit=limit,
+                                method=motion)
     if how == "lacam":
         return lacam.plan(instance, time_limit=limit, improve=min(1.0, limit / 2) if improve else 0.0)
     if instance.collisions == "classic":
