@@ -226,24 +226,24 @@ class _Seek:
     (:func:`.incumbent.fewer_robots`) for a fifth of the time limit (at least 4 s), then the
     complete planner (:func:`.incumbent.complete_search`) for a tenth (at least 2 s), so that
     what the bound search found beside it is read soon on small instances, and then once more,
-    from the start, with all the time left: its search is deterministic and heavy-tailed (on a random 10x8
-    instance with four robots and ten moved tiles, 17 s to a schedule with seed 0, 37 and 39 s
-    with seeds 1 and 3, none in 40 s with seed 2), so it is not cut into restarts."""
+    from the start, with all the time left: its search is deterministic and heavy-tailed (on a
+    random 10x8 instance with four robots and ten moved tiles, 17 s to a schedule with seed 0, 37
+    and 39 s with seeds 1 and 3, none in 40 s with seed 2), so it is not cut into restarts."""
 
     def __init__(self, run: _Anytime) -> None:
         self.run, self.infeasible = run, False
-        self.limit = max(2.0, 0.1 * (run.end - run.start))
-        self.fewer = True  # the loop with fewer robots is still to be tried, for twice the limit
+        tenth = max(2.0, 0.1 * (run.end - run.start))
+        self.stages = [(True, 2 * tenth), (False, tenth)]  # (fewer robots?, seconds), in turn
 
     def step(self) -> None:
         run = self.run
         began = time.perf_counter()
-        budget = max(0.01, min(self.limit * (2 if self.fewer else 1), run.left()))
-        if self.fewer:
-            found, self.fewer = fewer_robots(run.instance, budget), False
+        fewer, seconds = self.stages.pop(0) if self.stages else (False, float("inf"))
+        budget = max(0.01, min(seconds, run.left()))
+        if fewer:
+            found = fewer_robots(run.instance, budget)
         else:
             found, self.infeasible = complete_search(run.instance, budget)
-            self.limit = float("inf")
         run.stats["seek_s"] = round(run.stats.get("seek_s", 0.0) + time.perf_counter() - began, 3)
         if found is not None:
             run.start_from(found)
