@@ -1,9 +1,12 @@
-"""Small builders for hand-drawn test instances."""
+"""Small builders for hand-drawn test instances, and what a schedule does with its tiles."""
 from __future__ import annotations
 
 import json
 
 from bille.instances import instance_from_text
+from bille.instances.moveset import Kind
+from bille.instances.rules import State, run
+from bille.instances.schedule import bind
 from bille.solvers import schedule_from_text
 
 
@@ -28,3 +31,17 @@ def sched(*rows: str):
 
 def _rows(text: str) -> list[str]:
     return [r.strip() for r in text.strip().splitlines()]
+
+
+def manipulations(inst, schedule) -> list[tuple[int, int, str, int]]:
+    """(step, robot, "pick" | "place", target cell) of every manipulation, in order."""
+    ids = bind(inst, schedule)
+    state, out = inst.start_state, []
+    for t, nxt in enumerate(run(inst.world, state, ids)):
+        assert isinstance(nxt, State)
+        for i, g in enumerate(inst.world.graphs):
+            kind = g.kind[ids[i, t]]
+            if kind in (Kind.PICK, Kind.PLACE):
+                out.append((t, i, "pick" if kind == Kind.PICK else "place", int(g.target[state.poses[i], ids[i, t]])))
+        state = nxt
+    return out

@@ -12,24 +12,8 @@ from bille.instances import dump_instance, instance_from_text
 from bille.instances.generators.coop import LARGE, NO_SPLIT, approaches, attached, demonstration, gadget
 from bille.instances.generators.graphs import grid_graph, hamiltonian_path, random_grid_graph
 from bille.instances.generators.hampath import bound, search_optimum
-from bille.instances.moveset import Kind
-from bille.instances.rules import State, run
 from bille.solvers import Schedule, solve, validate
-from bille.instances.schedule import bind
-
-
-def _manipulations(inst, schedule) -> list[tuple[int, int, str, int]]:
-    """(step, robot, "pick" | "place", target cell) of every manipulation, in order."""
-    ids = bind(inst, schedule)
-    state, out = inst.start_state, []
-    for t, nxt in enumerate(run(inst.world, state, ids)):
-        assert isinstance(nxt, State)
-        for i, g in enumerate(inst.world.graphs):
-            kind = g.kind[ids[i, t]]
-            if kind in (Kind.PICK, Kind.PLACE):
-                out.append((t, i, "pick" if kind == Kind.PICK else "place", int(g.target[state.poses[i], ids[i, t]])))
-        state = nxt
-    return out
+from helpers import manipulations
 
 
 def _carries_once(inst, schedule) -> bool:
@@ -37,7 +21,7 @@ def _carries_once(inst, schedule) -> bool:
     a tile in the goal only: each tile is carried once, straight to its goal."""
     start, goal = inst.start.tiles, inst.goal_tiles
     return all((start[c] and not goal[c]) if what == "pick" else (goal[c] and not start[c])
-               for _, _, what, c in _manipulations(inst, schedule))
+               for _, _, what, c in manipulations(inst, schedule))
 
 
 def test_the_gadget_has_the_papers_tasks():
@@ -72,7 +56,7 @@ def test_splitting_the_large_task_beats_every_schedule_that_carries_each_tile_on
     assert report.metrics.makespan == inst.meta["split_makespan"] == 24 < NO_SPLIT
     assert not _carries_once(inst, shown)
     # the tile is handed over: set down by one robot off its goal, picked up by the other
-    moves = _manipulations(inst, shown)
+    moves = manipulations(inst, shown)
     goal_only = inst.goal_tiles & ~inst.start.tiles
     drops = [(t, i, c) for t, i, what, c in moves if what == "place" and not goal_only[c]]
     assert any(j != i and u > t and c == d for t, i, c in drops for u, j, what, d in moves if what == "pick")

@@ -12,9 +12,9 @@ from bille.instances.generators.random import random_reconfiguration
 from bille.instances.grid import is_connected
 from bille.instances.moveset import Kind
 from bille.instances.rules import State
-from bille.instances.schedule import Schedule, bind
+from bille.instances.schedule import Schedule
 from bille.solvers import solve, validate
-from helpers import make
+from helpers import make, manipulations
 from bille.tools.cli import main
 
 
@@ -312,9 +312,7 @@ def test_the_sequence_search_reaches_random_instances_with_ten_moved_tiles():
 # ---- fewer robots taking jobs ------------------------------------------------------------------
 
 def _manipulators(inst, schedule) -> set[int]:
-    ids = bind(inst, schedule)
-    return {i for i, row in enumerate(ids.tolist())
-            if any(inst.movesets[i].actions[a].kind in (Kind.PICK, Kind.PLACE) for a in row)}
+    return {robot for _, robot, _, _ in manipulations(inst, schedule)}
 
 
 @pytest.mark.parametrize("motion", ["temporal-astar", "mstar", "lacam"])
