@@ -37,8 +37,12 @@ class Schedule:
 
     @classmethod
     def from_ids(cls, instance: Instance, ids, meta: dict | None = None) -> "Schedule":
-        """Build a schedule from an ``int[m, L]`` matrix of action ids (the inverse of :func:`bind`)."""
-        ids = np.asarray(ids, dtype=np.int64).reshape(instance.num_robots, -1)
+        """Build a schedule from an ``int[m, L]`` matrix of action ids (the inverse of :func:`bind`).
+        With no robots the schedule is empty (length 0), whatever the matrix's shape."""
+        ids = np.asarray(ids, dtype=np.int64)
+        if instance.num_robots == 0:
+            return cls((), meta)
+        ids = ids.reshape(instance.num_robots, -1)
         return cls(tuple(tuple(ms.actions[a].name for a in row) for ms, row in zip(instance.movesets, ids.tolist())), meta)
 
 

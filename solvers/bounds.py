@@ -54,7 +54,7 @@ graph (:mod:`bille.instances.distances`): no schedule walks between two poses fa
     and place events with tiles conserved cell by cell: a linear program whose minimum bounds
     the actions of every schedule (:mod:`.routing`, whose docstring proves it).
 
-Static infeasibility (``impossible``): a robot whose goal cell is unreachable; a cell of ``F``
+Static infeasibility (``impossible``): tiles to move and no robot; a robot whose goal cell is unreachable; a cell of ``F``
 that no robot can ever place on (the bound above is infinite); a cell of ``R`` that no robot
 can ever pick at; cells of ``R`` that cannot all be assigned to cells of ``F`` at a finite
 closure distance. Each contradicts a part above, which holds for every schedule.
@@ -110,7 +110,9 @@ def lower_bound(instance: Instance) -> Bounds:
     parts["robot goals"] = goal_steps
 
     k, carried = int(remove.sum()), int(sum(state.carrying))
-    if k or carried:
+    if k and not instance.num_robots:
+        impossible.append(f"the goal moves {k} tiles and there is no robot")
+    elif k or carried:
         ahead = {id(g): manipulates_ahead(g) for g, _ in world.groups}  # per moveset graph
         actions = 2 * k + carried + (k if all(ahead.values()) else 0)
         parts["manipulations"] = -(-actions // m)

@@ -203,3 +203,16 @@ def test_bounds_never_exceed_the_optimum_on_many():
 @pytest.mark.slow
 def test_exact_back_ends_claim_the_optimum_on_many():
     assert check_exact(MANY, limit=50) == 50
+
+
+@pytest.mark.parametrize("method", ["astar", "mstar", "temporal-astar", "lacam", "cpsat", "sat", "anytime", "bfs"])
+def test_no_robots_and_nothing_to_do_is_solved_in_no_steps(method):
+    found = solve(make("TTT\nT.T", []), method)
+    assert found.status in ("optimal", "feasible") and found.metrics.makespan == 0
+    assert found.schedule.num_robots == 0 and validate(make("TTT\nT.T", []), found.schedule).valid
+
+
+def test_tiles_to_move_and_no_robot_is_proved_impossible():
+    inst = make("TTT\nT..", [], goal="TTT\n..T")
+    assert "no robot" in lower_bound(inst).impossible[0]
+    assert solve(inst, "cpsat").status == "infeasible"
