@@ -140,6 +140,15 @@ def test_gap_rejects_an_unknown_method(capsys):
     assert code == 2 and out == "" and "magic" in err
 
 
+def test_gap_reads_a_repeated_methods_option_as_one_list(tmp_path, capsys):
+    code, out, _ = run(capsys, "gap", "crowded-3", "--methods", "temporal-astar:H=10", "--methods", "sat",
+                       "--csv", str(tmp_path / "g.csv"), "--json")
+    assert code == 0
+    rows = {r["method"]: r for r in json.loads(out)["rows"]}
+    assert set(rows) == {"temporal-astar:H=10", "sat"}
+    assert rows["sat"]["status"] == "optimal" and rows["sat"]["makespan"] == 4
+
+
 def test_solve_exact_json(capsys, tmp_path):
     code, out, _ = run(capsys, "solve", "crowded-3", "--method", "sat", "--json", "-o", str(tmp_path / "s.yaml"))
     result = json.loads(out)

@@ -101,6 +101,18 @@ def test_gap_without_methods_is_bad_input(tmp_path, rejects):
     assert not (tmp_path / "g.csv").exists()
 
 
+@pytest.mark.parametrize("methods, message", [
+    (["mstar", "mstar"], "'mstar' is named twice"),
+    (["mstar:epsilon=2", "H=3"], "option 'H=3' comes before any method"),
+])
+def test_gap_reads_each_methods_option_on_its_own(tmp_path, rejects, methods, message):
+    argv = ["gap", "point-4", "--csv", tmp_path / "g.csv"]
+    for m in methods:
+        argv += ["--methods", m]
+    rejects(argv, message)
+    assert not (tmp_path / "g.csv").exists()
+
+
 @pytest.mark.parametrize("option", ["--resume", "--secrets"])
 def test_binary_files_are_named_not_decoded(tmp_path, rejects, option):
     blob = tmp_path / "blob.bin"

@@ -21,6 +21,7 @@ from __future__ import annotations
 import csv
 import statistics
 from dataclasses import dataclass, field
+from collections.abc import Iterable
 from pathlib import Path
 
 import yaml
@@ -48,10 +49,26 @@ class Config:
     options: dict = field(default_factory=dict)
 
 
-def parse_configs(text: str) -> list[Config]:
+def parse_configs(texts: str | Iterable[str]) -> list[Config]:
     """``"temporal-astar:H=10,load_transfer=true,mstar"`` -> two configurations: a token with
-    ``=`` and no ``:`` continues the options of the configuration before it. Raises
-    :class:`OptionError` naming what is wrong."""
+    ``=`` and no ``:`` continues the options of the configuration before it. Several texts (a
+    repeated ``--methods``) are read one by one, so options never run on from one text into the
+    next. Raises :class:`OptionError` naming what is wrong, including a configuration named twice
+    (its rows would be indistinguishable)."""
+    texts = [texts] if isinstance(texts, str) else list(texts)
+    configs: list[Config] = []
+    for text in texts:
+        configs += _parse_text(text)
+    labels = [c.label for c in configs]
+    twice = sorted({label for label in labels if labels.count(label) > 1})
+    if twice:
+        raise OptionError(f"method configuration {twice[0]!r} is named twice")
+    for c in configs:  # a wrong option is bad input, found before anything runs
+        check_options(c.method, METHODS[c.method], c.options, internal=("bounds", "progress"))
+    return configs
+
+
+def _parse_text(text: str) -> list[Config]:
     configs: list[Config] = []
     for token in (t.strip() for t in text.split(",")):
         if not token:
@@ -69,8 +86,6 @@ def parse_configs(text: str) -> list[Config]:
             _add_option(configs[-1], first)
     if not configs:
         raise OptionError(f"no method named in {text!r}")
-    for c in configs:  # a wrong option is bad input, found before anything runs
-        check_options(c.method, METHODS[c.method], c.options, internal=("bounds", "progress"))
     return configs
 
 

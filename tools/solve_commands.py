@@ -127,9 +127,10 @@ def _explain(inst, key: str, value) -> str:
 
 @click.command()
 @click.argument("instances", nargs=-1)
-@click.option("--methods", default=",".join(("temporal-astar", "mstar", "astar", "cpsat", "sat")), show_default=True,
+@click.option("--methods", multiple=True, default=(",".join(("temporal-astar", "mstar", "astar", "cpsat", "sat")),),
+              show_default=True,
               help="Comma-separated method configurations: NAME or NAME:OPTION=VALUE,OPTION=VALUE "
-                   "(e.g. temporal-astar:H=10,load_transfer=true,mstar).")
+                   "(e.g. temporal-astar:H=10,load_transfer=true,mstar); repeatable, each one read on its own.")
 @click.option("--schedule", "schedule_files", multiple=True, metavar="SCHEDULE",
               help="Also a schedule file as a row, on every instance with its number of robots (repeatable).")
 @click.option("--time-limit", type=click.FloatRange(min=0, min_open=True), default=60.0, show_default=True,
@@ -140,7 +141,7 @@ def _explain(inst, key: str, value) -> str:
 @click.option("--rerun", "rrd", type=click.Path(dir_okay=False), metavar="OUT.rrd",
               help="Write every schedule found to one rerun recording, side by side per instance.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of the table.")
-def gap(instances, methods: str, schedule_files, time_limit: float, threads: int, csv_path: str, rrd: str | None,
+def gap(instances, methods: tuple[str, ...], schedule_files, time_limit: float, threads: int, csv_path: str, rrd: str | None,
         as_json: bool) -> int:
     """How far methods are from the optimum: one table over INSTANCES (default: the bundled
     point-4) with each schedule's makespan, the best lower bound proved in the run (or carried
