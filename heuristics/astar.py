@@ -15,7 +15,7 @@ import time
 
 from bille.instances import Instance, OptionError
 
-from .joint import NO_WALK, OBJECTIVE, JointProblem, to_result, unwind
+from .joint import CHECK_EVERY, NO_WALK, OBJECTIVE, JointProblem, to_result, unwind
 
 
 def plan(instance: Instance, *, epsilon: float = 1.0, time_limit: float | None = None,
@@ -69,7 +69,10 @@ def plan(instance: Instance, *, epsilon: float = 1.0, time_limit: float | None =
             stats["failure"] = "time limit"
             return to_result(instance, "astar", "timeout", None, stats=stats)
         options = [problem.moves(i, p) for i, p in enumerate(poses)]
-        for actions, nxt in problem.joint_moves(poses, options):
+        for n, (actions, nxt) in enumerate(problem.joint_moves(poses, options), 1):
+            if n % CHECK_EVERY == 0 and deadline is not None and time.perf_counter() > deadline:
+                stats["failure"] = "time limit"  # one expansion of many robots has millions of children
+                return to_result(instance, "astar", "timeout", None, stats=stats)
             cost, new_debts = problem.transition(poses, debts, nxt)
             child = (nxt, new_debts)
             g = (g_soc + cost, g_t + 1)

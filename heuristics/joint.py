@@ -23,6 +23,7 @@ from bille.instances.walking import UNREACHABLE, Walk, walk_for
 Poses = tuple[int, ...]
 Debts = tuple[int, ...]
 OBJECTIVE = "sum of costs, then makespan, walking only (no pick or place)"
+CHECK_EVERY = 4096  # children of one expansion between looks at the clock (m robots: up to 5**m of them)
 
 
 @dataclass

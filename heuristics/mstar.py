@@ -28,7 +28,7 @@ import time
 
 from bille.instances import Instance, OptionError
 
-from .joint import NO_WALK, OBJECTIVE, JointProblem, to_result, unwind
+from .joint import CHECK_EVERY, NO_WALK, OBJECTIVE, JointProblem, to_result, unwind
 
 INF = (1 << 60, 0)
 
@@ -57,6 +57,10 @@ def joint_plan(problem: JointProblem, *, epsilon: float = 1.0, od: bool = True, 
     search = _MStar(problem, epsilon, od, time_limit, max_expansions)
     status, steps = search.search()
     return status, steps, search.stats
+
+
+class _OutOfTime(Exception):
+    """The time limit passed in the middle of an expansion."""
 
 
 class _MStar:
@@ -141,10 +145,13 @@ class _MStar:
             if stats["expanded"] > self.max_expansions:
                 stats["failure"] = "expansion cap"
                 return "unsolved", None
-            if self.deadline is not None and time.perf_counter() > self.deadline:
+            try:
+                if self.deadline is not None and time.perf_counter() > self.deadline:
+                    raise _OutOfTime
+                self.expand(node)
+            except _OutOfTime:
                 stats["failure"] = "time limit"
                 return "timeout", None
-            self.expand(node)
         stats["failure"] = NO_WALK
         return "unsolved", None
 
@@ -158,7 +165,9 @@ class _MStar:
             self.backprop(key, psi)
         g_soc, g_t = self.g[key]
         if not self.od or len(coupled) <= 1:
-            for actions, nxt in problem.joint_moves(poses, options):
+            for n, (actions, nxt) in enumerate(problem.joint_moves(poses, options), 1):
+                if n % CHECK_EVERY == 0 and self.deadline is not None and time.perf_counter() > self.deadline:
+                    raise _OutOfTime  # a collision set of many robots: millions of children
                 cost, new_debts = problem.transition(poses, debts, nxt)
                 self.reach(key, actions, nxt, new_debts, (g_soc + cost, g_t + 1))
             return
