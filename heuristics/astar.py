@@ -14,8 +14,9 @@ import itertools
 import time
 
 from bille.instances import Instance, OptionError
+from bille.instances.limits import CHECK_EVERY
 
-from .joint import CHECK_EVERY, NO_WALK, OBJECTIVE, JointProblem, to_result, unwind
+from .joint import NO_WALK, OBJECTIVE, JointProblem, to_result, unwind
 
 
 def plan(instance: Instance, *, epsilon: float = 1.0, time_limit: float | None = None,

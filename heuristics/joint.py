@@ -15,7 +15,7 @@ from typing import Iterator
 import numpy as np
 
 from bille.instances import Instance, OptionError
-from bille.instances.limits import check_budget
+from bille.instances.limits import CHECK_EVERY, check_budget
 from bille.instances.result import Result
 from bille.instances.schedule import Schedule
 from bille.instances.walking import UNREACHABLE, Walk, walk_for
@@ -23,7 +23,6 @@ from bille.instances.walking import UNREACHABLE, Walk, walk_for
 Poses = tuple[int, ...]
 Debts = tuple[int, ...]
 OBJECTIVE = "sum of costs, then makespan, walking only (no pick or place)"
-CHECK_EVERY = 4096  # children of one expansion between looks at the clock (m robots: up to 5**m of them)
 
 
 @dataclass

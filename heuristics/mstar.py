@@ -27,8 +27,9 @@ import itertools
 import time
 
 from bille.instances import Instance, OptionError
+from bille.instances.limits import CHECK_EVERY
 
-from .joint import CHECK_EVERY, NO_WALK, OBJECTIVE, JointProblem, to_result, unwind
+from .joint import NO_WALK, OBJECTIVE, JointProblem, to_result, unwind
 
 INF = (1 << 60, 0)
 

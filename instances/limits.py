@@ -16,6 +16,9 @@ from .errors import BilleError, InstanceError
 from .moveset import Moveset
 
 GIB = 1 << 30
+# joint actions tried between two looks at the clock in the searches over all robots at once:
+# one state of m robots has up to (actions per robot)**m of them, millions from ten robots on
+CHECK_EVERY = 4096
 
 
 def mapped() -> int:

@@ -13,6 +13,7 @@ from itertools import product
 import numpy as np
 
 from bille.instances import Instance, OptionError
+from bille.instances.limits import CHECK_EVERY
 from bille.instances.rules import State, apply, goal_violation
 from bille.instances.result import Result
 from bille.instances.schedule import Schedule
@@ -58,17 +59,26 @@ def plan(instance: Instance, *, time_limit: float | None = None, max_steps: int 
             truncated = True
             break
         nxt = []
-        for s in frontier:
+
+        def stopped() -> Result | None:
+            """The run's end if out of time or states; every state within ``depth`` steps has
+            been checked (the goal test above), so the optimum is larger than ``depth``."""
             out_of_time = deadline is not None and time.perf_counter() > deadline
-            if out_of_time or len(parent) > max_states:
-                # every state within `depth` steps has been checked: the optimum is larger
-                return Result("bfs", "timeout" if out_of_time else "unsolved", lower_bound=depth + 1,
-                              stats=stats("time limit" if out_of_time else "state cap"),
-                              time_s=time.perf_counter() - start)
+            if not out_of_time and len(parent) <= max_states:
+                return None
+            return Result("bfs", "timeout" if out_of_time else "unsolved", lower_bound=depth + 1,
+                          stats=stats("time limit" if out_of_time else "state cap"),
+                          time_s=time.perf_counter() - start)
+
+        for s in frontier:
+            if (end := stopped()) is not None:
+                return end
             expanded += 1
             options = [candidate_actions(instance, s, i) for i in range(instance.num_robots)]
             joints = product(*options) if world.classic else disjoint_products(instance, s, options)
-            for joint in joints:
+            for n, joint in enumerate(joints, 1):
+                if n % CHECK_EVERY == 0 and (end := stopped()) is not None:
+                    return end  # many robots: one state has millions of joint actions
                 new = apply(world, s, joint)
                 if isinstance(new, State):
                     key = new.key()

@@ -98,8 +98,9 @@ def test_failures_are_rows_with_their_reason(tmp_path):
     # building lt-4's SAT model takes far more than 50 MB: the run fails, the sweep goes on.
     # CaDiCaL's failed allocation ends its process (std::bad_alloc on stderr); Glucose solves on
     # conflict budgets alone there (no timer thread under so tight a limit: one could hang as it
-    # starts) and runs out of memory, in python-sat's wrapper or its own code
-    spec = load_spec(write_spec(tmp_path, "time_limit: 20\nmemory_limit: 50\ninstances: [lt-4, crowded-3]\n"
+    # starts) and runs out of memory, in python-sat's wrapper or its own code. The limit is ample
+    # (the memory runs out within seconds) so that a loaded machine cannot end a run in time first
+    spec = load_spec(write_spec(tmp_path, "time_limit: 90\nmemory_limit: 50\ninstances: [lt-4, crowded-3]\n"
                                           "methods: {sat: {solver: [cadical195, glucose42]}}\n"))
     _, rows = run_spec(spec, tmp_path / "out", jobs=2, quiet=True)
     by = {(r["instance"], json.loads(r["options"])["solver"]): r for r in rows}
