@@ -3,8 +3,9 @@ bound in turn, until they meet (``optimal``) or the time runs out (``feasible``,
 
 1. **First schedule**: the one given (``incumbent``), or the shortest the heuristics find in a
    fifth of the time limit (:func:`.incumbent.first_schedule`): milliseconds on most instances.
-   Where they find none, the loop with fewer robots taking jobs (:func:`.incumbent.fewer_robots`),
-   and then the complete planner (LaCAM* over whole states,
+   Where they find none, the runs their share cut short, again with more time
+   (:func:`.incumbent.retry`), the loop with fewer robots taking jobs
+   (:func:`.incumbent.fewer_robots`), and then the complete planner (LaCAM* over whole states,
    :func:`.incumbent.complete_search`) seeks one with the time left; when it exhausts the
    reachable states, no schedule exists and the answer is ``infeasible``.
 2. Then two searches run side by side, the first in a child process on a second core
@@ -56,7 +57,7 @@ from bille.instances.rules import goal_violation
 from bille.instances.schedule import Schedule
 
 from .bounds import Bounds, lower_bound
-from .incumbent import EXHAUSTED, Incumbent, complete_search, fewer_robots, first_schedule, from_schedule
+from .incumbent import EXHAUSTED, Incumbent, complete_search, fewer_robots, first_schedule, from_schedule, retry
 from .windows import Windows, solve_with_cuts
 
 try:  # the bound search runs in a forked child process where the platform has fork
@@ -116,6 +117,7 @@ class _Anytime:
         self.lower = self.bounds.lower
         self.progress = progress
         self.given = incumbent
+        self.cut: list = []  # the first schedule's runs that ran out of their share
         self.best: Incumbent | None = None
         self.stats = {"improvements": [], "lower_bounds": [],
                       "windows": {"tried": 0, "shortened": 0, "swapped": 0, "not_shorter": 0, "undecided": 0},
@@ -201,7 +203,7 @@ class _Anytime:
         return found
 
     def _first(self, given: Incumbent | None) -> None:
-        found = given or first_schedule(self.instance, max(0.01, min(10.0, 0.2 * self.left())))
+        found = given or first_schedule(self.instance, max(0.01, min(10.0, 0.2 * self.left())), cut=self.cut)
         if found is not None:
             self.start_from(found)
         else:
@@ -223,24 +225,31 @@ class _Anytime:
 
 class _Seek:
     """No schedule yet: the reconfiguration loop with fewer robots taking jobs
-    (:func:`.incumbent.fewer_robots`) for a fifth of the time limit (at least 4 s), then the
-    complete planner (:func:`.incumbent.complete_search`) for a tenth (at least 2 s), so that
-    what the bound search found beside it is read soon on small instances, and then once more,
-    from the start, with all the time left: its search is deterministic and heavy-tailed (on a
-    random 10x8 instance with four robots and ten moved tiles, 17 s to a schedule with seed 0, 37
-    and 39 s with seeds 1 and 3, none in 40 s with seed 2), so it is not cut into restarts."""
+    (:func:`.incumbent.fewer_robots`) for a fifth of the time limit (at least 4 s); the runs of the
+    first schedule that their share cut short, again with twice the time in turn
+    (:func:`.incumbent.retry`: a run that ends before its time drops out), for up to three tenths
+    (at least 6 s); then the complete planner (:func:`.incumbent.complete_search`) for a tenth (at
+    least 2 s), so that what the bound search found beside it is read soon on small instances,
+    and then once more, from the start, with all the time left: its search is deterministic and
+    heavy-tailed (on a random 10x8 instance with four robots and ten moved tiles, 17 s to a
+    schedule with seed 0, 37 and 39 s with seeds 1 and 3, none in 40 s with seed 2), so it is
+    not cut into restarts."""
 
     def __init__(self, run: _Anytime) -> None:
         self.run, self.infeasible = run, False
         tenth = max(2.0, 0.1 * (run.end - run.start))
-        self.stages = [(True, 2 * tenth), (False, tenth)]  # (fewer robots?, seconds), in turn
+        self.stages = [("fewer robots", 2 * tenth)]  # (stage, seconds), in turn
+        self.stages += [("retry", 3 * tenth)] if run.cut else []
+        self.stages += [("complete", tenth)]
 
     def step(self) -> None:
         run = self.run
         began = time.perf_counter()
-        fewer, seconds = self.stages.pop(0) if self.stages else (False, float("inf"))
+        stage, seconds = self.stages.pop(0) if self.stages else ("complete", float("inf"))
         budget = max(0.01, min(seconds, run.left()))
-        if fewer:
+        if stage == "retry":
+            found = retry(run.instance, run.cut, budget)
+        elif stage == "fewer robots":
             found = fewer_robots(run.instance, budget)
         else:
             found, self.infeasible = complete_search(run.instance, budget)

@@ -126,6 +126,60 @@ def test_with_no_schedule_from_the_heuristics_the_complete_planner_gives_one(mon
     _monotone(result.stats, result.stats["first"]["makespan"])
 
 
+def _late_runs(monkeypatch, needs: dict) -> list:
+    """``incumbent._run`` faked: run ``name`` gives reconfig-30's bundled schedule when it has at
+    least ``needs[name]`` seconds (None: it gives up at once), else runs out of time, between the
+    loop's steps except for "one step" (a joint plan not found in time). Returns the log of
+    (name, seconds) calls."""
+    from bille.instances.result import Result
+    from bille.instances.schedule import load_schedule
+    from bille.solvers import incumbent
+
+    sched = load_schedule(bundled_path("reconfig-30.schedule"))
+    calls = []
+
+    def run(instance, how, limit, improve):
+        calls.append((how, limit))
+        if needs[how] is None:
+            return Result(how, "unsolved", stats={"failure": "deadlock"})
+        if limit >= needs[how]:
+            return Result(how, "feasible", sched)
+        return Result(how, "timeout", stats={"failure": "time limit" if how != "one step" else "no joint plan"})
+
+    monkeypatch.setattr(incumbent, "_run", run)
+    return calls
+
+
+def test_runs_cut_short_are_retried_with_twice_the_time(monkeypatch):
+    from bille.solvers.incumbent import retry
+
+    inst = load_instance(bundled_path("reconfig-30"))
+    calls = _late_runs(monkeypatch, {"slow": 1.5, "stuck": None, "never": 1e9, "one step": 1e9})
+    cut = [(name, name, 0.5) for name in ("never", "stuck", "one step", "slow")]
+    found = retry(inst, cut, budget=30.0)
+    assert found is not None and found.method == "slow"
+    assert calls == [("never", 1.0), ("stuck", 1.0), ("one step", 1.0), ("slow", 1.0), ("never", 2.0),
+                     ("slow", 2.0)]
+    assert validate(inst, Schedule.from_ids(inst, found.ids)).valid
+    assert retry(inst, [("never", "never", 0.5)], budget=1.0) is None  # the budget bounds it
+
+
+def test_a_first_run_cut_short_gives_the_first_schedule_with_more_time(monkeypatch):
+    calls = _late_runs(monkeypatch, {"late": 2.0})
+
+    def first(instance, budget, improve=True, cut=None):
+        cut.append(("late", "late", 1.0))
+
+    monkeypatch.setattr(anytime, "first_schedule", first)
+    monkeypatch.setattr(anytime, "fewer_robots", lambda *args, **kw: None)
+    monkeypatch.setattr(anytime, "complete_search", lambda *args, **kw: pytest.fail("not needed"))
+    monkeypatch.setattr(anytime._Rise, "step", lambda self, until: None)  # no bound search
+    inst = load_instance(bundled_path("reconfig-30"))
+    result = solve(inst, "anytime", time_limit=3, parallel=False)
+    assert result.stats["first"]["method"] == "late" and calls[0] == ("late", 2.0)
+    assert validate(inst, result.schedule).valid
+
+
 @pytest.mark.slow
 def test_with_no_schedule_from_every_robot_the_loop_with_fewer_gives_one(monkeypatch):
     monkeypatch.setattr(anytime, "first_schedule", lambda *args, **kw: None)
