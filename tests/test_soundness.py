@@ -21,18 +21,20 @@ from helpers import make
 from tinyworlds import tiny_instances
 
 MAX_STATES = 5_000  # the reference gives up beyond this; such instances are not counted
+# on the many: 1,500 states decide 93 of 200 optima in half the time of 5,000 (101)
+MANY_STATES = 1_500
 
 
 @functools.cache
-def reference(inst):
-    return bfs(inst, max_states=MAX_STATES)
+def reference(inst, states: int = MAX_STATES):
+    return bfs(inst, max_states=states)
 
 
-def check_bounds(instances) -> dict:
+def check_bounds(instances, states: int = MAX_STATES) -> dict:
     """Every bound part against the reference; returns counts of what was decided."""
     counts = {"optimal": 0, "infeasible": 0, "undecided": 0, "routing binds": 0}
     for inst in instances:
-        ref, bounds = reference(inst), lower_bound(inst)
+        ref, bounds = reference(inst, states), lower_bound(inst)
         if ref.status == "optimal":
             counts["optimal"] += 1
             assert validate(inst, ref.schedule).valid
@@ -48,11 +50,11 @@ def check_bounds(instances) -> dict:
     return counts
 
 
-def check_exact(instances, methods=("cpsat", "sat"), limit: int = 8) -> int:
+def check_exact(instances, methods=("cpsat", "sat"), limit: int = 8, states: int = MAX_STATES) -> int:
     """Both exact back ends claim exactly the reference's optimum; returns how many were compared."""
     compared = 0
     for inst in instances:
-        ref = reference(inst)
+        ref = reference(inst, states)
         if ref.status == "optimal":
             for method in methods:
                 got = solve(inst, method, time_limit=60)
@@ -195,14 +197,14 @@ def test_exact_back_ends_claim_the_optimum():
 
 @pytest.mark.slow
 def test_bounds_never_exceed_the_optimum_on_many():
-    counts = check_bounds(MANY)
+    counts = check_bounds(MANY, MANY_STATES)
     assert counts["optimal"] >= 80 and counts["infeasible"] >= 40, counts
     assert counts["routing binds"] >= 10, counts  # the LP is put to the test, not only the others
 
 
 @pytest.mark.slow
 def test_exact_back_ends_claim_the_optimum_on_many():
-    assert check_exact(MANY, limit=50) == 50
+    assert check_exact(MANY, limit=50, states=MANY_STATES) == 50
 
 
 @pytest.mark.parametrize("method", ["astar", "mstar", "temporal-astar", "lacam", "cpsat", "sat", "anytime", "bfs"])
