@@ -118,6 +118,13 @@ def _gather(world: World, state: State, actions: np.ndarray) -> _Joint:
     m = world.num_robots
     poses = np.asarray(state.poses, dtype=np.int64)
     carrying = np.asarray(state.carrying, dtype=bool)
+    if len(world.groups) == 1:  # one moveset: every row at once (the same rows as below)
+        g = world.groups[0][0]
+        carried = np.where(carrying[:, None], g.carry[poses, actions], -1)
+        return _Joint(kind=g.kind[actions].astype(np.int8), succ=g.succ[poses, actions].astype(np.int64),
+                      target=g.target[poses, actions].astype(np.int64), carry_ok=g.carry_ok[poses, actions].astype(bool),
+                      coll=np.concatenate([g.coll[poses, actions], carried], axis=1).astype(np.int64),
+                      need=g.need[poses, actions].astype(np.int64))
     k = max(g.coll.shape[2] + g.carry.shape[2] for g, _ in world.groups) if m else 1
     j = _Joint(
         kind=np.zeros(m, np.int8), succ=np.zeros(m, np.int64), target=np.zeros(m, np.int64),
@@ -231,6 +238,18 @@ def goal_violation(world: World, state: State, goal_tiles: np.ndarray, robot_goa
 
 def _bille_collision(world: World, j: _Joint, step: int) -> Violation | None:
     """Rule 3: the collision sets are pairwise disjoint."""
+    seen: set = set()
+    for row in j.coll.tolist():  # the common case, no clash, in plain sets (a few robots)
+        cells = set(row)
+        cells.discard(-1)
+        if not seen.isdisjoint(cells):
+            return _bille_clash(world, j, step)
+        seen |= cells
+    return None
+
+
+def _bille_clash(world: World, j: _Joint, step: int) -> Violation | None:
+    """The first clash of rule 3, described."""
     n = world.width * world.height
     owner = np.repeat(np.arange(world.num_robots), j.coll.shape[1])
     cells = j.coll.reshape(-1)

@@ -7,9 +7,13 @@ is still judged by :func:`~bille.instances.rules.apply`.
 """
 from __future__ import annotations
 
+import numpy as np
+
 from .instance import Instance
 from .moveset import Kind
 from .rules import State
+
+WAIT, MOTION, PICK, PLACE = (int(k) for k in (Kind.WAIT, Kind.MOTION, Kind.PICK, Kind.PLACE))
 
 
 def candidate_actions(instance: Instance, state: State, i: int) -> list[int]:
@@ -20,20 +24,17 @@ def candidate_actions(instance: Instance, state: State, i: int) -> list[int]:
     filter loses no valid joint action.
     """
     g = instance.world.graphs[i]
-    p, carrying, tiles = state.poses[i], state.carrying[i], state.tiles
-    out = []
-    for a in range(g.num_actions):
-        if g.succ[p, a] < 0 or (carrying and not g.carry_ok[p, a]):
-            continue
-        kind, t = g.kind[a], g.target[p, a]
-        if kind == Kind.PICK and (carrying or not tiles[t]):
-            continue
-        if kind == Kind.PLACE and (not carrying or tiles[t]):
-            continue
-        if kind in (Kind.WAIT, Kind.MOTION) and not tiles[g.need[p, a]].all():
-            continue
-        out.append(a)
-    return out
+    p, carrying, tiles = state.poses[i], bool(state.carrying[i]), state.tiles
+    kind, target = g.kind, g.target[p]
+    ok = g.succ[p] >= 0
+    if carrying:
+        ok &= g.carry_ok[p]
+    has = tiles[target]  # (a target of -1, on no pick or place, reads a cell that is not used)
+    ok &= (kind != PICK) | (not carrying and has)
+    ok &= (kind != PLACE) | (carrying and ~has)
+    walks = (kind == WAIT) | (kind == MOTION)
+    ok &= ~walks | tiles[g.need[p]].all(axis=1)
+    return np.flatnonzero(ok).tolist()
 
 
 def collision_cells(instance: Instance, state: State, i: int, a: int) -> frozenset[int]:
