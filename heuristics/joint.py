@@ -15,7 +15,7 @@ from typing import Iterator
 import numpy as np
 
 from bille.instances import Instance, OptionError
-from bille.instances.limits import CHECK_EVERY, check_budget
+from bille.instances.limits import check_budget
 from bille.instances.result import Result
 from bille.instances.schedule import Schedule
 from bille.instances.walking import UNREACHABLE, Walk, walk_for

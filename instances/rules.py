@@ -122,7 +122,8 @@ def _gather(world: World, state: State, actions: np.ndarray) -> _Joint:
         g = world.groups[0][0]
         carried = np.where(carrying[:, None], g.carry[poses, actions], -1)
         return _Joint(kind=g.kind[actions].astype(np.int8), succ=g.succ[poses, actions].astype(np.int64),
-                      target=g.target[poses, actions].astype(np.int64), carry_ok=g.carry_ok[poses, actions].astype(bool),
+                      target=g.target[poses, actions].astype(np.int64),
+                      carry_ok=g.carry_ok[poses, actions].astype(bool),
                       coll=np.concatenate([g.coll[poses, actions], carried], axis=1).astype(np.int64),
                       need=g.need[poses, actions].astype(np.int64))
     k = max(g.coll.shape[2] + g.carry.shape[2] for g, _ in world.groups) if m else 1

@@ -3,9 +3,9 @@ bound in turn, until they meet (``optimal``) or the time runs out (``feasible``,
 
 1. **First schedule**: the one given (``incumbent``), or the shortest the heuristics find in a
    fifth of the time limit (:func:`.incumbent.first_schedule`): milliseconds on most instances.
-   Where they find none, the runs their share cut short, again with more time
-   (:func:`.incumbent.retry`), the loop with fewer robots taking jobs
-   (:func:`.incumbent.fewer_robots`), and then the complete planner (LaCAM* over whole states,
+   Where they find none, the loop with fewer robots taking jobs (:func:`.incumbent.fewer_robots`),
+   the runs their share cut short, again with more time (:func:`.incumbent.retry`), and then the
+   complete planner (LaCAM* over whole states,
    :func:`.incumbent.complete_search`) seeks one with the time left; when it exhausts the
    reachable states, no schedule exists and the answer is ``infeasible``.
 2. Then two searches run side by side, the first in a child process on a second core

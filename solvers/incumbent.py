@@ -80,11 +80,12 @@ def retry(instance: Instance, cut: list, budget: float) -> Incumbent | None:
     still cut, until one finds a schedule or ``budget`` ends), or None. A run is *cut short* when
     its time ran out between the loop's steps (``stats.failure`` "time limit": it was still
     getting on); one that ends otherwise (a deadlock, no joint plan for one step within its time)
-    is not tried again: on random 10x8 maps with 30 tiles, where the joint plans of one step run
-    out of time, twice the time measured no better and took the complete planner's. On a random 40x40 map with 600
-    tiles, six robots and 30 moved tiles (``bille gen random --width 40 --height 40 --tiles 600
-    --robots 6 --moved 30 --seed 1``) the loop with LaCAM* needs 3.4 s, more than a share of the
-    first schedule's budget in a 60 s run, and nothing else finds a schedule."""
+    is not tried again: on sixteen random 10x8 maps with 30 tiles, where the joint plans of one
+    step run out of time, twice the time gave none of them a schedule and took the complete
+    planner's time. On a random 40x40 map with 600 tiles, six robots and 30 moved tiles (``bille
+    gen random --width 40 --height 40 --tiles 600 --robots 6 --moved 30 --seed 1``) the loop with
+    LaCAM* needs about 3 s, more than its share of the first schedule's budget in a 60 s run, and
+    nothing else finds a schedule."""
     end = time.perf_counter() + budget
     pending = list(cut)
     while pending and time.perf_counter() < end:

@@ -20,8 +20,8 @@ from __future__ import annotations
 
 import csv
 import statistics
-from dataclasses import dataclass, field
 from collections.abc import Iterable
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import yaml
