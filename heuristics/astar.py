@@ -14,9 +14,8 @@ import itertools
 import time
 
 from bille.instances import Instance, OptionError
-from bille.instances.limits import CHECK_EVERY
 
-from .joint import NO_WALK, OBJECTIVE, JointProblem, to_result, unwind
+from .joint import NO_WALK, OBJECTIVE, JointProblem, OutOfTime, to_result, unwind
 
 
 def plan(instance: Instance, *, epsilon: float = 1.0, time_limit: float | None = None,
@@ -66,23 +65,23 @@ def plan(instance: Instance, *, epsilon: float = 1.0, time_limit: float | None =
         if stats["expanded"] > max_expansions:
             stats["failure"] = "expansion cap"
             return to_result(instance, "astar", "unsolved", None, stats=stats)
-        if deadline is not None and time.perf_counter() > deadline:
+        try:
+            if deadline is not None and time.perf_counter() > deadline:
+                raise OutOfTime
+            options = [problem.moves(i, p) for i, p in enumerate(poses)]
+            for actions, nxt in problem.joint_moves(poses, options, deadline):
+                cost, new_debts = problem.transition(poses, debts, nxt)
+                child = (nxt, new_debts)
+                g = (g_soc + cost, g_t + 1)
+                if child in closed or (child in best and best[child] <= g):
+                    continue
+                best[child] = g
+                parent[child] = (key, actions)
+                h = problem.h(nxt)
+                stats["generated"] += 1
+                heapq.heappush(frontier, (g[0] + epsilon * h[0], g[1] + h[1], next(counter), child))
+        except OutOfTime:  # before the expansion, or within it (many robots: millions of children)
             stats["failure"] = "time limit"
             return to_result(instance, "astar", "timeout", None, stats=stats)
-        options = [problem.moves(i, p) for i, p in enumerate(poses)]
-        for n, (actions, nxt) in enumerate(problem.joint_moves(poses, options), 1):
-            if n % CHECK_EVERY == 0 and deadline is not None and time.perf_counter() > deadline:
-                stats["failure"] = "time limit"  # one expansion of many robots has millions of children
-                return to_result(instance, "astar", "timeout", None, stats=stats)
-            cost, new_debts = problem.transition(poses, debts, nxt)
-            child = (nxt, new_debts)
-            g = (g_soc + cost, g_t + 1)
-            if child in closed or (child in best and best[child] <= g):
-                continue
-            best[child] = g
-            parent[child] = (key, actions)
-            h = problem.h(nxt)
-            stats["generated"] += 1
-            heapq.heappush(frontier, (g[0] + epsilon * h[0], g[1] + h[1], next(counter), child))
     stats["failure"] = NO_WALK
     return to_result(instance, "astar", "unsolved", None, stats=stats)

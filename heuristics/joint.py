@@ -9,13 +9,14 @@ compared lexicographically ("ties broken by makespan").
 """
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 from typing import Iterator
 
 import numpy as np
 
 from bille.instances import Instance, OptionError
-from bille.instances.limits import check_budget
+from bille.instances.limits import CHECK_EVERY, check_budget
 from bille.instances.result import Result
 from bille.instances.schedule import Schedule
 from bille.instances.walking import UNREACHABLE, Walk, walk_for
@@ -23,6 +24,10 @@ from bille.instances.walking import UNREACHABLE, Walk, walk_for
 Poses = tuple[int, ...]
 Debts = tuple[int, ...]
 OBJECTIVE = "sum of costs, then makespan, walking only (no pick or place)"
+
+
+class OutOfTime(Exception):
+    """The time limit passed in the middle of one state's joint actions."""
 
 
 @dataclass
@@ -100,14 +105,26 @@ class JointProblem:
         options = self.walks[i].moves(pose)
         return options if only is None else [m for m in options if m[1] == only][:1]
 
-    def joint_moves(self, poses: Poses, options: list[list]) -> Iterator[tuple[tuple[int, ...], Poses]]:
+    def joint_moves(self, poses: Poses, options: list[list],
+                    deadline: float | None = None) -> Iterator[tuple[tuple[int, ...], Poses]]:
         """Joint actions from per-robot move lists whose collision sets are pairwise disjoint
-        (DESIGN §3 rule 3; rules 1, 2 and 4 hold for every walking move on a fixed structure)."""
+        (DESIGN §3 rule 3; rules 1, 2 and 4 hold for every walking move on a fixed structure).
+        Past ``deadline`` (looked at every :data:`CHECK_EVERY` joint actions: ten robots give
+        millions of them) raises :class:`OutOfTime`."""
+        moves = self._classic_moves(poses, options) if self.instance.collisions == "classic" \
+            else self._disjoint_moves(options)
+        if deadline is None:
+            yield from moves
+            return
+        for n, move in enumerate(moves, 1):
+            if n % CHECK_EVERY == 0 and time.perf_counter() > deadline:
+                raise OutOfTime
+            yield move
+
+    def _disjoint_moves(self, options: list[list]):
+        """Joint actions whose collision sets are pairwise disjoint (the Bill-E rule)."""
         m = len(options)
         actions, nxt = [0] * m, [0] * m
-        if self.instance.collisions == "classic":
-            yield from self._classic_moves(poses, options)
-            return
 
         def extend(i: int, used: frozenset):
             if i == m:

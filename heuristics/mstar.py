@@ -27,9 +27,8 @@ import itertools
 import time
 
 from bille.instances import Instance, OptionError
-from bille.instances.limits import CHECK_EVERY
 
-from .joint import NO_WALK, OBJECTIVE, JointProblem, to_result, unwind
+from .joint import NO_WALK, OBJECTIVE, JointProblem, OutOfTime, to_result, unwind
 
 INF = (1 << 60, 0)
 
@@ -58,10 +57,6 @@ def joint_plan(problem: JointProblem, *, epsilon: float = 1.0, od: bool = True, 
     search = _MStar(problem, epsilon, od, time_limit, max_expansions)
     status, steps = search.search()
     return status, steps, search.stats
-
-
-class _OutOfTime(Exception):
-    """The time limit passed in the middle of an expansion."""
 
 
 class _MStar:
@@ -148,9 +143,9 @@ class _MStar:
                 return "unsolved", None
             try:
                 if self.deadline is not None and time.perf_counter() > self.deadline:
-                    raise _OutOfTime
+                    raise OutOfTime
                 self.expand(node)
-            except _OutOfTime:
+            except OutOfTime:
                 stats["failure"] = "time limit"
                 return "timeout", None
         stats["failure"] = NO_WALK
@@ -166,9 +161,7 @@ class _MStar:
             self.backprop(key, psi)
         g_soc, g_t = self.g[key]
         if not self.od or len(coupled) <= 1:
-            for n, (actions, nxt) in enumerate(problem.joint_moves(poses, options), 1):
-                if n % CHECK_EVERY == 0 and self.deadline is not None and time.perf_counter() > self.deadline:
-                    raise _OutOfTime  # a collision set of many robots: millions of children
+            for actions, nxt in problem.joint_moves(poses, options, self.deadline):
                 cost, new_debts = problem.transition(poses, debts, nxt)
                 self.reach(key, actions, nxt, new_debts, (g_soc + cost, g_t + 1))
             return

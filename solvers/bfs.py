@@ -49,6 +49,16 @@ def plan(instance: Instance, *, time_limit: float | None = None, max_steps: int 
         out = {"expanded": expanded, "states": len(parent), "depth": depth}
         return out if failure is None else {**out, "failure": failure}
 
+    def stopped() -> Result | None:
+        """The run's end if out of time or states; every state within ``depth`` steps has been
+        checked (the goal test of each level), so the optimum is larger than ``depth``."""
+        out_of_time = deadline is not None and time.perf_counter() > deadline
+        if not out_of_time and len(parent) <= max_states:
+            return None
+        return Result("bfs", "timeout" if out_of_time else "unsolved", lower_bound=depth + 1,
+                      stats=stats("time limit" if out_of_time else "state cap"),
+                      time_s=time.perf_counter() - start)
+
     while frontier:
         for s in frontier:
             if goal_violation(world, s, goal_tiles, goal_cells, depth) is None:
@@ -59,17 +69,6 @@ def plan(instance: Instance, *, time_limit: float | None = None, max_steps: int 
             truncated = True
             break
         nxt = []
-
-        def stopped() -> Result | None:
-            """The run's end if out of time or states; every state within ``depth`` steps has
-            been checked (the goal test above), so the optimum is larger than ``depth``."""
-            out_of_time = deadline is not None and time.perf_counter() > deadline
-            if not out_of_time and len(parent) <= max_states:
-                return None
-            return Result("bfs", "timeout" if out_of_time else "unsolved", lower_bound=depth + 1,
-                          stats=stats("time limit" if out_of_time else "state cap"),
-                          time_s=time.perf_counter() - start)
-
         for s in frontier:
             if (end := stopped()) is not None:
                 return end

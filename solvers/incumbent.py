@@ -94,10 +94,10 @@ def retry(instance: Instance, cut: list, budget: float) -> Incumbent | None:
         limit = min(left, 2 * had)
         found = _run(instance, how, max(0.01, limit), improve=False)
         if found is not None and found.schedule is not None:
-            candidate = _compacted_result(instance, found, name, max(0.01, min(0.5, 0.1 * budget)))
+            candidate = _compacted_result(instance, found, name, _compact_s(budget))
             if candidate is not None:
                 return candidate
-        elif found is not None and found.stats.get("failure") == "time limit" and limit < left:
+        elif _cut_short(found) and limit < left:
             pending.append((name, how, limit))
     return None
 
@@ -200,15 +200,26 @@ def _portfolio(instance: Instance, runs, budget: float, improve: bool, first: bo
         if found is None:
             continue
         if found.schedule is None:
-            if found.stats.get("failure") == "time limit" and cut is not None:
+            if cut is not None and _cut_short(found):
                 cut.append((name, how, limit))
             continue
-        candidate = _compacted_result(instance, found, name, max(0.01, min(0.5, 0.1 * budget)))
+        candidate = _compacted_result(instance, found, name, _compact_s(budget))
         if candidate is not None and (best is None or candidate.makespan < best.makespan):
             best = candidate
             if first:
                 break
     return best
+
+
+def _cut_short(found) -> bool:
+    """Whether a run without a schedule ended because its time ran out between the loop's steps
+    (see :func:`retry`)."""
+    return found is not None and found.stats.get("failure") == "time limit"
+
+
+def _compact_s(budget: float) -> float:
+    """Seconds to compact one schedule found within ``budget``."""
+    return max(0.01, min(0.5, 0.1 * budget))
 
 
 def _run(instance: Instance, how, limit: float, improve: bool):

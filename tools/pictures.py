@@ -178,16 +178,17 @@ class Painter:
         (the coordinates took two fifths of an animation's time when redrawn every frame)."""
         for r, c, tr, t in panels:
             ax = self.axes[r][c]
-            if (r, c) in self._drawn:
+            fresh = (r, c) not in self._drawn
+            if fresh:
+                ax.clear()
+                ax.set_axis_off()
+            else:
                 for artist in [*ax.images, *ax.patches, *ax.lines, *ax.texts, *ax.collections]:
                     artist.remove()
-                _draw_frame(ax, tr, t)
-                continue
-            ax.clear()
-            ax.set_axis_off()
             _draw_frame(ax, tr, t)
-            self._coordinates(ax)
-            self._drawn.add((r, c))
+            if fresh:
+                self._coordinates(ax)
+                self._drawn.add((r, c))
 
     def image(self) -> np.ndarray:
         """The figure as ``uint8[H, W, 3]``."""
