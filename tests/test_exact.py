@@ -151,7 +151,9 @@ def test_a_timeout_returns_the_incumbent(method, name, monkeypatch):
     result = solve(inst, method, time_limit=600)
     assert result.status == "feasible"
     assert validate(inst, result.schedule).valid
-    assert result.stats["incumbent"]["method"] in ("lacam", "temporal-astar", "mstar")
+    # a heuristic's schedule, whichever of the portfolio ends first in the time share (its name
+    # says what ran: "mstar", "lacam+transfer", "temporal-astar+derived", ...)
+    assert result.stats["incumbent"]["method"].split("+")[0] in ("lacam", "temporal-astar", "mstar")
     assert result.metrics.makespan == result.stats["incumbent"]["makespan"]
     assert lower_bound(inst).lower <= result.lower_bound <= result.metrics.makespan
 
