@@ -41,6 +41,7 @@ from bille.instances.schedule import Schedule
 from .bounds import Bounds, lower_bound
 from .incumbent import EXHAUSTED, to_cap
 from .lanes import Lanes
+from .satsearch import SatSearch
 
 
 def default_cap(lower: int) -> int:
@@ -116,7 +117,7 @@ def plan_sat(instance: Instance, *, time_limit: float | None = None, max_makespa
                    bounds=bounds, progress=progress).run()
 
 
-class _Search(Lanes):
+class _Search(Lanes, SatSearch):
     def __init__(self, method, instance, time_limit, max_makespan, connectivity, minimize_travel, prune,
                  single_carry, **kw):
         if time_limit is not None and time_limit <= 0:
@@ -315,66 +316,6 @@ class _Search(Lanes):
                 ids = decode(model, self.instance, backend.value)
                 self.stats["tiles_traveled_optimal"] = status == SAT
                 return ids
-
-    # ---- SAT: incremental over a range of horizons ----------------------------------------------
-
-    def _sat(self) -> Result:
-        k = max(1, self.bounds.lower)
-        while k <= self.cap:
-            T = min(self.cap, k + self.kw["chunk"] - 1)
-            try:
-                model = build(self.instance, T, self.options, min_done=k, deadline=self.deadline)
-            except OutOfTime:
-                return self.timeout(k)
-            backend = SatBackend(model, self.kw["solver"])
-            try:
-                while k <= T:
-                    if self.incumbent is not None and k >= self.incumbent.shape[1]:
-                        return self._proved_incumbent(k)
-                    began = time.perf_counter()
-                    status = self._sat_solve(backend, model, [model.done[k]])
-                    self.stats["horizons"].append({"T": k, "model_horizon": T, "variables": backend.top,
-                                                   "clauses": backend.num_clauses, "answer": status,
-                                                   "time_s": round(time.perf_counter() - began, 3)})
-                    self._report()
-                    if status == UNKNOWN:
-                        return self.timeout(k)
-                    if status == SAT:
-                        self.stats["makespan_s"] = round(time.perf_counter() - self.start, 3)
-                        ids = decode(model, self.instance, backend.value)[:, :k]
-                        ids = self._sat_travel(backend, model, k, ids)
-                        self.stats["solver"] = backend.stats
-                        return self.result("optimal", ids, lower=k)
-                    k += 1
-            finally:
-                backend.delete()
-        return self._infeasible()
-
-    def _sat_solve(self, backend, model, assumptions) -> str:
-        while True:
-            status = backend.solve(assumptions, self.deadline)
-            if status != SAT or self._check(backend, model):
-                return status
-
-    def _sat_travel(self, backend, model, k, ids):
-        self.stats["tiles_traveled_optimal"] = False
-        if not self.minimize_travel:
-            return ids
-        # motions after step k are excluded by done[k]: count only those up to k
-        steps = {v: t for (_, t), group in model.y.items() for v, _, _ in group}
-        motion = [v for v in model.motion if steps[v] <= k]
-        best = sum(backend.value(v) for v in motion)
-        with self.travel_time():
-            while best > 0:
-                status = self._sat_solve(backend, model, [model.done[k], backend.at_most(motion, best - 1)])
-                if status == UNKNOWN:
-                    return ids
-                if status == UNSAT:
-                    break
-                ids = decode(model, self.instance, backend.value)[:, :k]
-                best = sum(backend.value(v) for v in motion)
-        self.stats["tiles_traveled_optimal"] = True
-        return ids
 
     def _infeasible(self) -> Result:
         """No schedule within the horizon cap: not a proof that none exists (a longer one may),
