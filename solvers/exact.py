@@ -44,6 +44,9 @@ from .lanes import Lanes
 from .satsearch import SatSearch
 
 
+SINGLE_CARRY = "makespan among the schedules that carry every tile once (single_carry)"
+
+
 def default_cap(lower: int) -> int:
     """The default horizon cap: generous for the small instances exact solvers are for."""
     return max(2 * lower, lower + 24)
@@ -77,6 +80,9 @@ def plan_cpsat(instance: Instance, *, time_limit: float | None = None, threads: 
         ``prune``; off alone, the encoding as it was before it (``bille bench exact`` compares).
     single_carry : only schedules that carry every tile once, from a start-only cell straight to
         a goal-only cell (no hand-over): the best such makespan (see ``encodings.model.Options``).
+        Its proofs hold for those schedules only: ``optimal`` is optimal for ``stats.objective``,
+        their bound is ``stats.restricted_lower_bound``, and ``lower_bound`` stays the instance's
+        static bound (a hand-over may be shorter: Theorem 2's gadget, 24 against 28).
     first_horizon : a guess of the optimal makespan: the search starts there, going down while
         schedules are found and up while none is, instead of up from the lower bound (each
         horizon below the optimum costs a proof of infeasibility; one at ``T - 1`` is enough).
@@ -144,8 +150,10 @@ class _Search(Lanes, SatSearch):
                               f"{self.bounds.lower} ({_parts(self.bounds.parts)})")
         self.stats = {"lower_bound": self.bounds.lower, "bound_parts": self.bounds.parts, "horizon_cap": self.cap,
                       "connectivity": connectivity, "pruning": prune, "cuts": 0, "horizons": []}
+        self.restricted = single_carry
         if single_carry:
             self.stats["single_carry"] = True
+            self.stats["objective"] = SINGLE_CARRY
 
     @contextmanager
     def travel_time(self):
@@ -175,8 +183,16 @@ class _Search(Lanes, SatSearch):
 
     def _find_incumbent(self) -> bool:
         """A first schedule (:func:`.incumbent.to_cap`); its makespan caps the search. True if
-        the complete planner proved instead that no schedule exists."""
-        found, exhausted = to_cap(self.instance, self.kw.pop("incumbent", None), self.deadline, self.method)
+        the complete planner proved instead that no schedule exists. A restricted search
+        (``single_carry``) takes none: a schedule outside the restriction would cap its horizons,
+        and be returned as if it were the restriction's optimum."""
+        given = self.kw.pop("incumbent", None)
+        if self.restricted:
+            if given is not None:
+                raise OptionError(f"{self.method}: an incumbent cannot be combined with single_carry (a schedule "
+                                  f"that hands a tile over would cap the single-carry search)")
+            return False
+        found, exhausted = to_cap(self.instance, given, self.deadline, self.method)
         if found is None:
             return exhausted
         self.stats["incumbent"] = {"method": found.method, "makespan": found.makespan}
@@ -193,6 +209,12 @@ class _Search(Lanes, SatSearch):
                            "elapsed": time.perf_counter() - self.start})
 
     def result(self, status, ids=None, lower=None) -> Result:
+        """The result; a restricted search's proofs (``single_carry``) hold for the schedules of
+        the restriction only, so they go to ``stats.restricted_lower_bound`` and the instance
+        keeps its static bound (``optimal`` then means optimal for ``stats.objective``)."""
+        if self.restricted and lower is not None:
+            self.stats["restricted_lower_bound"] = lower
+            lower = self.bounds.lower
         schedule = None if ids is None else Schedule.from_ids(self.instance, ids, meta={"method": self.method})
         return Result(self.method, status, schedule, lower_bound=lower, stats=self.stats,
                       time_s=time.perf_counter() - self.start)
@@ -323,7 +345,8 @@ class _Search(Lanes, SatSearch):
         incumbent above the cap exists."""
         if self.fallback is not None:
             return self.result("feasible", self.fallback, lower=self.cap + 1)
-        self.stats["failure"] = f"no schedule with a makespan up to the horizon cap {self.cap}"
+        which = "single-carry schedule" if self.restricted else "schedule"
+        self.stats["failure"] = f"no {which} with a makespan up to the horizon cap {self.cap}"
         return self.result("unsolved", lower=self.cap + 1)
 
 

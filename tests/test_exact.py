@@ -70,11 +70,42 @@ def test_single_carry_leaves_out_the_hand_over(method, optimum):
     # carried once, straight from its start to its goal, the tile could not get past a robot
     inst = TINY["handover"]()
     capped = solve(inst, method, single_carry=True, max_makespan=16)
-    assert capped.status == "unsolved" and capped.lower_bound == 17
+    assert capped.status == "unsolved" and capped.stats["restricted_lower_bound"] == 17
+    assert "single-carry" in capped.stats["failure"]
+    # no bound for the instance: the hand-over is shorter
+    assert capped.lower_bound == lower_bound(inst).lower <= optimum("handover") < 17
     plain = TINY["point-move-tile"]()
     result = solve(plain, method, single_carry=True)
     assert result.status == "optimal" and result.metrics.makespan == optimum("point-move-tile")
     assert result.stats["single_carry"] and validate(plain, result.schedule).valid
+
+
+# the best single-carry schedule takes 6 steps; the optimum, 3, takes a tile out of the
+# structure and puts the carried one in its place
+SHORTER_BY_RELAY = dict(grid=".....\nTTTTT\n.TTTT", robots=[{"at": [3, 1]}, {"at": [1, 2]}],
+                        goal=".T...\nTTTTT\n.TTT.", moveset="point")
+
+
+@pytest.mark.parametrize("method", ["cpsat", "sat"])
+def test_a_single_carry_proof_is_no_bound_for_the_instance(method):
+    from bille.tools.gap import parse_configs, run
+
+    inst = make(SHORTER_BY_RELAY["grid"], SHORTER_BY_RELAY["robots"], goal=SHORTER_BY_RELAY["goal"],
+                moveset="point")
+    best = solve(inst, "bfs", time_limit=60)
+    assert best.status == "optimal" and best.metrics.makespan == 3
+    restricted = solve(inst, method, single_carry=True)
+    assert restricted.status == "optimal" and restricted.metrics.makespan == 6
+    assert restricted.stats["restricted_lower_bound"] == 6 and "single_carry" in restricted.stats["objective"]
+    assert restricted.lower_bound <= best.metrics.makespan
+    assert validate(inst, restricted.schedule).valid
+    with pytest.raises(OptionError, match="single_carry"):  # a hand-over would cap the single-carry search
+        solve(inst, method, single_carry=True, incumbent=best.schedule)
+    # in the gap report the single-carry optimum certifies nothing: the optimum is the plain search's
+    rows = {r["method"]: r for r in run([inst], parse_configs(f"{method}:single_carry=true,{method}"), 60)}
+    assert rows[method]["status"] == "optimal" and rows[method]["makespan"] == 3
+    assert all(r["lower_bound"] == 3 and r["best"] == 3 for r in rows.values())
+    assert rows[f"{method}:single_carry=true"]["gap_percent"] == 100.0
 
 
 @pytest.mark.slow

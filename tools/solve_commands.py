@@ -64,6 +64,10 @@ def solve_(instance: str, method: str, epsilon, horizon, time_limit, threads, lo
     if result.lower_bound is not None:
         text += f"; makespan lower bound {result.lower_bound}"
     click.echo(text)
+    if "objective" in result.stats:  # what optimal means when it is not the makespan of every schedule
+        click.echo(f"objective: {result.stats['objective']}")
+    if "restricted_lower_bound" in result.stats:
+        click.echo(f"lower bound among those schedules: {result.stats['restricted_lower_bound']}")
     for key in ("unreachable", "failure", "reason", "violation"):
         if key in result.stats:
             click.echo(f"{key}: {_explain(inst, key, result.stats[key])}")
