@@ -47,11 +47,10 @@ import numpy as np
 
 from bille.instances import Instance
 from bille.instances.moveset import Kind
-from bille.instances.distances import INF, relaxed_for
 
 from .connectivity import eager_connectivity
-from .ends import add_end_constraints, end_poses, end_roles
-from .reach import reach_in_time
+from .ends import add_end_constraints, end_roles
+from .prune import candidate_cells, change_window, reachable_poses
 
 CONNECTIVITY = ("eager", "lazy", "cuts")
 
@@ -152,8 +151,8 @@ class _Builder:
         return self.m.true if value else -self.m.true
 
     def build(self, min_done: int | None) -> Model:
-        self._reachable_poses()
-        self._candidate_cells()
+        reachable_poses(self)
+        candidate_cells(self)
         self._variables()
         self._actions()
         if self.end is not None:
@@ -168,86 +167,12 @@ class _Builder:
             self._done(min_done)
         return self.m
 
-    # ---- pruning -----------------------------------------------------------------------------
-
-    def _reachable_poses(self) -> None:
-        """R[i][t]: bool mask of the poses robot i may have at time t."""
-        T, goals = self.T, self.inst.goal_cells
-        self.timed = reach_in_time(self.inst, T, self.end, self.roles) if self.opt.prune_tiles else None
-        if self.end is not None:
-            goals = [-1] * len(goals)
-        self.R = []
-        for i, g in enumerate(self.world.graphs):
-            start = self.state.poses[i]
-            if self.opt.prune_reach:
-                relaxed = relaxed_for(g)
-                fwd = relaxed.from_pose(start)
-                bwd = relaxed.to_front(goals[i]) if goals[i] >= 0 else np.zeros(g.num_poses, np.int64)
-            else:
-                fwd = np.where(g.valid, 0, INF)
-                bwd = np.zeros(g.num_poses, np.int64)
-            masks = []
-            for t in range(T + 1):
-                mask = g.valid & (fwd <= t) & (bwd <= T - t)
-                if t == 0:
-                    mask = np.zeros(g.num_poses, bool)
-                    mask[start] = True
-                if t == T and goals[i] >= 0:
-                    mask &= g.feet[:, 0] == goals[i]
-                if t == T and self.end is not None:
-                    mask &= np.isin(np.arange(g.num_poses), end_poses(self.end, self.roles[i]))
-                if self.timed is not None:
-                    mask &= self.timed.poses[i][t]
-                masks.append(mask)
-            self.R.append(masks)
-
-    def _candidate_cells(self) -> None:
-        """Cells that may hold a tile at some time."""
-        inst = self.inst
-        cand = inst.start.tiles | inst.goal_tiles  # with single_carry, all of them
-        if self.opt.prune_cells and not self.opt.single_carry:
-            for i, g in enumerate(self.world.graphs):
-                seen = np.zeros(g.num_poses, bool)
-                for mask in self.R[i]:
-                    seen |= mask
-                places = np.flatnonzero(g.kind == Kind.PLACE)
-                if len(places):
-                    t = g.target[seen][:, places]
-                    cand[t[t >= 0]] = True
-        elif not self.opt.single_carry:
-            cand = ~self.world.obstacles.copy()
-        cand &= ~self.world.obstacles
-        self.cand = cand
-        self.m.candidates = cand
-        self.cells = np.flatnonzero(cand).tolist()
-        # a pose whose feet can never stand on tiles is never used
-        for i, g in enumerate(self.world.graphs):
-            stands = cand[np.maximum(g.feet, 0)].all(axis=1) & g.valid
-            for t in range(1, self.T + 1):
-                self.R[i][t] &= stands
-
     # ---- variables ---------------------------------------------------------------------------
-
-    def _change_window(self) -> dict[int, tuple[int, int]]:
-        """Per candidate cell, the first and last step at which a robot could pick or place on
-        it (from the poses it may have); outside that window the cell keeps its start value
-        before and its goal value after."""
-        window = {}
-        for i, g in enumerate(self.world.graphs):
-            manip = np.flatnonzero(np.isin(g.kind, (Kind.PICK, Kind.PLACE)))
-            if not len(manip):
-                continue
-            for t in range(1, self.T + 1):
-                targets = g.target[self.R[i][t - 1]][:, manip]
-                for c in np.unique(targets[targets >= 0]).tolist():
-                    lo, hi = window.get(c, (t, t))
-                    window[c] = (min(lo, t), max(hi, t))
-        return window
 
     def _variables(self) -> None:
         m, T, inst = self.m, self.T, self.inst
         goal, start = inst.goal_tiles, inst.start.tiles
-        window = self._change_window() if self.opt.prune_cells else {}
+        window = change_window(self) if self.opt.prune_cells else {}
         for c in self.cells:
             # a cell never in reach keeps its start value; if the goal differs, the clauses of
             # step T contradict and this horizon is infeasible
