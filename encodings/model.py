@@ -61,14 +61,15 @@ class OutOfTime(Exception):
 
 @dataclass(frozen=True)
 class Options:
-    """How to build the model: pruning switches, the connectivity encoding, and one restriction.
+    """How to build the model: pruning switches, the connectivity encoding, and two restrictions.
 
-    ``single_carry`` restricts the schedules to those that carry every tile once, straight from
-    its start cell to its goal cell: a tile is picked only from a cell that holds one in the start
-    and not in the goal, and placed only on a cell that holds one in the goal and not in the
-    start (no tile is set down on the way, handed over, or moved out of the structure and back).
-    It is the baseline of the cooperative gadget (docs/generators.md), whose optimum needs a
-    hand-over.
+    ``keep_structure`` restricts the schedules to those that pick and place only on the cells
+    where the start and the goal differ: a tile of both stays where it is, a cell empty in both
+    stays empty (no stepping stone, nothing of the structure moved aside and back).
+    ``single_carry`` restricts them further to those that carry every tile once, straight from
+    its start cell to its goal cell: each of those cells changes once (no tile is set down on the
+    way or handed over). It is the baseline of the cooperative gadget (docs/generators.md), whose
+    optimum needs a hand-over.
     """
 
     prune_reach: bool = True
@@ -76,6 +77,12 @@ class Options:
     prune_tiles: bool = True  # reachability in time with the tiles (:mod:`.reach`)
     connectivity: str = "eager"
     single_carry: bool = False
+    keep_structure: bool = False
+
+    @property
+    def kept(self) -> bool:
+        """Whether the cells where the start and the goal agree never change."""
+        return self.single_carry or self.keep_structure
 
 
 @dataclass
@@ -186,7 +193,7 @@ class _Builder:
                     m.tile[(t, c)] = self.const(bool(goal[c]))
                 elif self.timed is not None and not self.timed.tiles[t, c]:
                     m.tile[(t, c)] = self.const(False)
-                elif self.opt.single_carry and start[c] == goal[c]:
+                elif self.opt.kept and start[c] == goal[c]:
                     m.tile[(t, c)] = self.const(bool(goal[c]))
                 else:
                     m.tile[(t, c)] = m.var(("tile", t, c))

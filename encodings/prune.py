@@ -49,8 +49,8 @@ def reachable_poses(builder) -> None:
 def candidate_cells(builder) -> None:
     """Cells that may hold a tile at some time."""
     inst = builder.inst
-    cand = inst.start.tiles | inst.goal_tiles  # with single_carry, all of them
-    if builder.opt.prune_cells and not builder.opt.single_carry:
+    cand = inst.start.tiles | inst.goal_tiles  # with a restriction (Options.kept), all of them
+    if builder.opt.prune_cells and not builder.opt.kept:
         for i, g in enumerate(builder.world.graphs):
             seen = np.zeros(g.num_poses, bool)
             for mask in builder.R[i]:
@@ -59,7 +59,7 @@ def candidate_cells(builder) -> None:
             if len(places):
                 t = g.target[seen][:, places]
                 cand[t[t >= 0]] = True
-    elif not builder.opt.single_carry:
+    elif not builder.opt.kept:
         cand = ~builder.world.obstacles.copy()
     cand &= ~builder.world.obstacles
     builder.cand = cand

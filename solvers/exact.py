@@ -44,7 +44,14 @@ from .lanes import Lanes
 from .satsearch import SatSearch
 
 
-SINGLE_CARRY = "makespan among the schedules that carry every tile once (single_carry)"
+# the restrictions of the model (encodings.model.Options): what their optimum is optimal for, and
+# what their schedules are called
+RESTRICTIONS = {
+    "single_carry": ("makespan among the schedules that carry every tile once (single_carry)",
+                     "single-carry schedule"),
+    "keep_structure": ("makespan among the schedules that pick and place only where the start and the goal differ "
+                       "(keep_structure)", "schedule that keeps the structure"),
+}
 
 
 def default_cap(lower: int) -> int:
@@ -55,7 +62,7 @@ def default_cap(lower: int) -> int:
 def plan_cpsat(instance: Instance, *, time_limit: float | None = None, threads: int = 1, seed: int = 0,
                presolve: bool = False,
                max_makespan: int | None = None, connectivity: str = "eager", minimize_travel: bool = True,
-               prune: bool = True, prune_tiles: bool = True, single_carry: bool = False,
+               prune: bool = True, prune_tiles: bool = True, single_carry: bool = False, keep_structure: bool = False,
                first_horizon: int | None = None, incumbent: Schedule | None = None, travel_time: float | None = None,
                bounds: Bounds | None = None, progress: Callable | None = None) -> Result:
     """Optimal makespan with OR-Tools CP-SAT.
@@ -83,6 +90,10 @@ def plan_cpsat(instance: Instance, *, time_limit: float | None = None, threads: 
         Its proofs hold for those schedules only: ``optimal`` is optimal for ``stats.objective``,
         their bound is ``stats.restricted_lower_bound``, and ``lower_bound`` stays the instance's
         static bound (a hand-over may be shorter: Theorem 2's gadget, 24 against 28).
+    keep_structure : only schedules that pick and place where the start and the goal differ (no
+        stepping stone, no tile of the structure moved aside): the best such makespan, with the
+        proofs of ``single_carry`` about those schedules only (bridge-3: 19, where moving the
+        structure gives 15). ``single_carry`` is the stricter of the two.
     first_horizon : a guess of the optimal makespan: the search starts there, going down while
         schedules are found and up while none is, instead of up from the lower bound (each
         horizon below the optimum costs a proof of infeasibility; one at ``T - 1`` is enough).
@@ -94,13 +105,14 @@ def plan_cpsat(instance: Instance, *, time_limit: float | None = None, threads: 
     if first_horizon is not None and first_horizon < 1:
         raise OptionError(f"cpsat: first_horizon must be at least 1, got {first_horizon}")
     return _Search("cpsat", instance, time_limit, max_makespan, connectivity, minimize_travel, (prune, prune_tiles),
-                   single_carry, threads=threads, seed=seed, presolve=presolve, travel_time=travel_time,
-                   first_horizon=first_horizon, incumbent=incumbent, bounds=bounds, progress=progress).run()
+                   _restriction(single_carry, keep_structure), threads=threads, seed=seed, presolve=presolve,
+                   travel_time=travel_time, first_horizon=first_horizon, incumbent=incumbent, bounds=bounds,
+                   progress=progress).run()
 
 
 def plan_sat(instance: Instance, *, time_limit: float | None = None, max_makespan: int | None = None,
              connectivity: str = "eager", minimize_travel: bool = True, prune: bool = True, prune_tiles: bool = True,
-             single_carry: bool = False, solver: str = "glucose42", chunk: int = 1,
+             single_carry: bool = False, keep_structure: bool = False, solver: str = "glucose42", chunk: int = 1,
              incumbent: Schedule | None = None, travel_time: float | None = None, bounds: Bounds | None = None,
              progress: Callable | None = None) -> Result:
     """Optimal makespan with a SAT solver of python-sat, incremental with assumptions.
@@ -119,13 +131,13 @@ def plan_sat(instance: Instance, *, time_limit: float | None = None, max_makespa
     if solver not in SOLVERS:
         raise OptionError(f"sat: unknown solver {solver!r} (expected one of: {', '.join(SOLVERS)})")
     return _Search("sat", instance, time_limit, max_makespan, connectivity, minimize_travel, (prune, prune_tiles),
-                   single_carry, solver=solver, chunk=chunk, incumbent=incumbent, travel_time=travel_time,
-                   bounds=bounds, progress=progress).run()
+                   _restriction(single_carry, keep_structure), solver=solver, chunk=chunk, incumbent=incumbent,
+                   travel_time=travel_time, bounds=bounds, progress=progress).run()
 
 
 class _Search(Lanes, SatSearch):
     def __init__(self, method, instance, time_limit, max_makespan, connectivity, minimize_travel, prune,
-                 single_carry, **kw):
+                 restriction, **kw):
         if time_limit is not None and time_limit <= 0:
             raise OptionError(f"{method}: the time limit must be positive, got {time_limit}")
         if connectivity not in CONNECTIVITY:
@@ -139,7 +151,8 @@ class _Search(Lanes, SatSearch):
         prune, prune_tiles = prune
         self.options = Options(prune_reach=prune, prune_cells=prune, prune_tiles=prune and prune_tiles,
                                connectivity=connectivity,
-                               single_carry=single_carry)
+                               single_carry=restriction == "single_carry",
+                               keep_structure=restriction == "keep_structure")
         self.minimize_travel = minimize_travel
         self.incumbent: np.ndarray | None = None
         self.fallback: np.ndarray | None = None
@@ -150,10 +163,10 @@ class _Search(Lanes, SatSearch):
                               f"{self.bounds.lower} ({_parts(self.bounds.parts)})")
         self.stats = {"lower_bound": self.bounds.lower, "bound_parts": self.bounds.parts, "horizon_cap": self.cap,
                       "connectivity": connectivity, "pruning": prune, "cuts": 0, "horizons": []}
-        self.restricted = single_carry
-        if single_carry:
-            self.stats["single_carry"] = True
-            self.stats["objective"] = SINGLE_CARRY
+        self.restricted = restriction
+        if restriction is not None:
+            self.stats[restriction] = True
+            self.stats["objective"] = RESTRICTIONS[restriction][0]
 
     @contextmanager
     def travel_time(self):
@@ -184,13 +197,13 @@ class _Search(Lanes, SatSearch):
     def _find_incumbent(self) -> bool:
         """A first schedule (:func:`.incumbent.to_cap`); its makespan caps the search. True if
         the complete planner proved instead that no schedule exists. A restricted search
-        (``single_carry``) takes none: a schedule outside the restriction would cap its horizons,
-        and be returned as if it were the restriction's optimum."""
+        (``single_carry``, ``keep_structure``) takes none: a schedule outside the restriction would
+        cap its horizons, and be returned as if it were the restriction's optimum."""
         given = self.kw.pop("incumbent", None)
         if self.restricted:
             if given is not None:
-                raise OptionError(f"{self.method}: an incumbent cannot be combined with single_carry (a schedule "
-                                  f"that hands a tile over would cap the single-carry search)")
+                raise OptionError(f"{self.method}: an incumbent cannot be combined with {self.restricted} (a "
+                                  f"schedule outside the restriction would cap its search)")
             return False
         found, exhausted = to_cap(self.instance, given, self.deadline, self.method)
         if found is None:
@@ -209,7 +222,7 @@ class _Search(Lanes, SatSearch):
                            "elapsed": time.perf_counter() - self.start})
 
     def result(self, status, ids=None, lower=None) -> Result:
-        """The result; a restricted search's proofs (``single_carry``) hold for the schedules of
+        """The result; a restricted search's proofs (:data:`RESTRICTIONS`) hold for the schedules of
         the restriction only, so they go to ``stats.restricted_lower_bound`` and the instance
         keeps its static bound (``optimal`` then means optimal for ``stats.objective``)."""
         if self.restricted and lower is not None:
@@ -345,9 +358,13 @@ class _Search(Lanes, SatSearch):
         incumbent above the cap exists."""
         if self.fallback is not None:
             return self.result("feasible", self.fallback, lower=self.cap + 1)
-        which = "single-carry schedule" if self.restricted else "schedule"
+        which = RESTRICTIONS[self.restricted][1] if self.restricted else "schedule"
         self.stats["failure"] = f"no {which} with a makespan up to the horizon cap {self.cap}"
         return self.result("unsolved", lower=self.cap + 1)
+
+
+def _restriction(single_carry: bool, keep_structure: bool) -> str | None:
+    return "single_carry" if single_carry else "keep_structure" if keep_structure else None
 
 
 def _parts(parts: dict) -> str:

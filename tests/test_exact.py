@@ -6,7 +6,9 @@ from bille.instances.bundled import bundled_path
 from bille.instances.schedule import Schedule, bind
 from bille.solvers import solve, validate
 from bille.solvers.bounds import lower_bound
-from helpers import make
+from helpers import make, manipulations
+from test_soundness import reference
+from tinyworlds import tiny_instances
 
 TINY = {
     "point-walk": lambda: make("TTTT\nT..T\nTTTT", [{"at": [0, 0]}], moveset="point", robot_goals=[[3, 2]]),
@@ -86,26 +88,54 @@ SHORTER_BY_RELAY = dict(grid=".....\nTTTTT\n.TTTT", robots=[{"at": [3, 1]}, {"at
                         goal=".T...\nTTTTT\n.TTT.", moveset="point")
 
 
+@pytest.mark.parametrize("restriction", ["single_carry", "keep_structure"])
 @pytest.mark.parametrize("method", ["cpsat", "sat"])
-def test_a_single_carry_proof_is_no_bound_for_the_instance(method):
+def test_a_restricted_proof_is_no_bound_for_the_instance(method, restriction):
     from bille.tools.gap import parse_configs, run
 
     inst = make(SHORTER_BY_RELAY["grid"], SHORTER_BY_RELAY["robots"], goal=SHORTER_BY_RELAY["goal"],
                 moveset="point")
     best = solve(inst, "bfs", time_limit=60)
     assert best.status == "optimal" and best.metrics.makespan == 3
-    restricted = solve(inst, method, single_carry=True)
+    restricted = solve(inst, method, **{restriction: True})
     assert restricted.status == "optimal" and restricted.metrics.makespan == 6
-    assert restricted.stats["restricted_lower_bound"] == 6 and "single_carry" in restricted.stats["objective"]
+    assert restricted.stats["restricted_lower_bound"] == 6 and restriction in restricted.stats["objective"]
     assert restricted.lower_bound <= best.metrics.makespan
     assert validate(inst, restricted.schedule).valid
-    with pytest.raises(OptionError, match="single_carry"):  # a hand-over would cap the single-carry search
-        solve(inst, method, single_carry=True, incumbent=best.schedule)
-    # in the gap report the single-carry optimum certifies nothing: the optimum is the plain search's
-    rows = {r["method"]: r for r in run([inst], parse_configs(f"{method}:single_carry=true,{method}"), 60)}
+    with pytest.raises(OptionError, match=restriction):  # the optimum would cap the restricted search
+        solve(inst, method, incumbent=best.schedule, **{restriction: True})
+    # in the gap report the restricted optimum certifies nothing: the optimum is the plain search's
+    rows = {r["method"]: r for r in run([inst], parse_configs(f"{method}:{restriction}=true,{method}"), 60)}
     assert rows[method]["status"] == "optimal" and rows[method]["makespan"] == 3
     assert all(r["lower_bound"] == 3 and r["best"] == 3 for r in rows.values())
-    assert rows[f"{method}:single_carry=true"]["gap_percent"] == 100.0
+    assert rows[f"{method}:{restriction}=true"]["gap_percent"] == 100.0
+
+
+def _keeps_structure(inst, schedule) -> bool:
+    differ = inst.start.tiles != inst.goal_tiles
+    return all(differ[c] for _, _, _, c in manipulations(inst, schedule))
+
+
+@pytest.mark.parametrize("method", ["cpsat", "sat"])
+def test_keeping_the_structure_is_optimal_where_brute_force_keeps_it(method):
+    # the restricted optimum lies between the optimum and the single-carry optimum, and equals the
+    # optimum wherever the brute-force search's optimal schedule keeps the structure itself
+    kept = 0
+    for inst in tiny_instances(12, 400):
+        best = reference(inst)
+        if best.status != "optimal":
+            continue
+        got = solve(inst, method, keep_structure=True, max_makespan=best.lower_bound + 10, time_limit=60)
+        assert got.lower_bound <= best.lower_bound, inst.name  # the instance's bound only
+        if _keeps_structure(inst, best.schedule):
+            kept += 1
+            assert got.status == "optimal" and got.metrics.makespan == best.lower_bound, inst.name
+        if got.schedule is not None:
+            assert validate(inst, got.schedule).valid and _keeps_structure(inst, got.schedule), inst.name
+            assert got.metrics.makespan >= best.lower_bound, inst.name
+            carried = solve(inst, method, single_carry=True, max_makespan=got.metrics.makespan, time_limit=60)
+            assert carried.schedule is None or carried.metrics.makespan >= got.metrics.makespan, inst.name
+    assert kept >= 3
 
 
 @pytest.mark.slow
