@@ -101,6 +101,7 @@ class Model:
     true: int = 0
     candidates: np.ndarray | None = None  # cells that may ever hold a tile
     ends: dict = field(default_factory=dict)  # robot -> [(robot whose end state, x literal)] (:mod:`.ends`)
+    families: dict = field(default_factory=dict)  # constraint family -> its share of size(), in build order
 
     @property
     def num_vars(self) -> int:
@@ -160,19 +161,25 @@ class _Builder:
     def build(self, min_done: int | None) -> Model:
         reachable_poses(self)
         candidate_cells(self)
-        self._variables()
-        self._actions()
+        self._family("tiles, loads and poses", self._variables)
+        self._family("actions", self._actions)  # with the poses they lead to and the new feet on tiles
         if self.end is not None:
-            add_end_constraints(self)
+            self._family("window ends", add_end_constraints, self)
         self.tick()
-        self._dynamics()
+        self._family("picks, places and loads", self._dynamics)
         self.tick()
-        self._collisions()
+        self._family("collisions", self._collisions)
         if self.opt.connectivity == "eager":
-            eager_connectivity(self)
+            self._family("connectivity", eager_connectivity, self)
         if min_done is not None:
-            self._done(min_done)
+            self._family("makespan (done)", self._done, min_done)
         return self.m
+
+    def _family(self, name: str, add, *args) -> None:
+        """Add one family of constraints, and record its share of the model (``Model.families``)."""
+        before = self.m.size()
+        add(*args)
+        self.m.families[name] = {k: v - before[k] for k, v in self.m.size().items()}
 
     # ---- variables ---------------------------------------------------------------------------
 
@@ -291,21 +298,30 @@ class _Builder:
                 m.clauses.append([-self.tile(t - 1, c), self.tile(t, c)] + picks[(t, c)])
 
     def _collisions(self) -> None:
-        """Per step and cell, at most one robot's collision set (rule 3)."""
+        """Per step and cell, at most one robot's collision set (rule 3). A robot's feet before
+        and after the step are implied to be in it by its poses at ``t - 1`` and ``t``, the other
+        cells (swept, target) by its action, and the carried-tile cells by its action and its load.
+        The poses say the same as the actions that leave and reach them (a robot has one pose at
+        a time, and every action from a pose needs its feet), in fewer clauses, and the solver
+        decides faster with them: bridge-2 at ``T = 18`` 30 s against 62 s, bridge-3 at ``T = 14``
+        42 s against 61 s (one CP-SAT worker)."""
         m = self.m
         if self.inst.num_robots < 2:
             return
         for t in range(1, self.T + 1):
             self.tick()
-            users = defaultdict(lambda: defaultdict(list))  # cell -> robot -> [(y, conditional?)]
+            users = defaultdict(lambda: defaultdict(dict))  # cell -> robot -> {(literal, conditional?)}
             for i, g in enumerate(self.world.graphs):
                 for v, p, a in m.y[(i, t)]:
+                    q = int(g.succ[p, a])
+                    feet = {c: self.x[(i, t, q)] for c in g.feet[q].tolist()}
+                    feet.update({c: self.x[(i, t - 1, p)] for c in g.feet[p].tolist()})
                     for c in g.coll[p, a].tolist():
                         if c >= 0:
-                            users[c][i].append((v, False))
+                            users[c][i][feet.get(c, v), False] = None
                     for c in g.carry[p, a].tolist():
                         if c >= 0:
-                            users[c][i].append((v, True))
+                            users[c][i][v, True] = None
             for c, by_robot in users.items():
                 if len(by_robot) < 2:
                     continue

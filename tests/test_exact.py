@@ -256,6 +256,20 @@ def test_pruning_cuts_the_model_and_keeps_the_answer():
     assert a.metrics.makespan == b.metrics.makespan == 13
 
 
+def test_the_model_is_the_sum_of_its_families():
+    from bille.encodings.model import Options, build
+
+    inst = load_instance(bundled_path("bridge-3"))
+    end = inst.start_state  # a window back to where it started
+    for model in (build(inst, 9, Options(), min_done=8), build(inst, 6, Options(connectivity="lazy"), end=end)):
+        size = model.size()
+        for key, total in size.items():  # besides the constant true: one variable, one clause
+            assert sum(part[key] for part in model.families.values()) == total - (key in ("variables", "clauses"))
+    assert "makespan (done)" in build(inst, 9, Options(), min_done=8).families
+    assert list(model.families) == ["tiles, loads and poses", "actions", "window ends", "picks, places and loads",
+                                    "collisions"]
+
+
 # ---- random tiny instances: bounds and the exact solver against breadth-first search ----------
 
 from hypothesis import HealthCheck, assume, given, settings, strategies as st  # noqa: E402

@@ -135,15 +135,16 @@ def bench_planners(time_limit: float, jobs: int | None, maps: str, movesets: str
 @click.option("--time-limit", type=click.FloatRange(min=1), default=120.0, show_default=True, help="Seconds per run.")
 @click.option("--threads", type=click.IntRange(min=1), default=2, show_default=True, help="CP-SAT workers.")
 @click.option("--only", type=click.Choice(["optimum", "connectivity", "pruning", "presolve", "before-after",
-                                          "sat-solver", "freedom"]),
+                                          "sat-solver", "freedom", "families"]),
               multiple=True, help="Run only these sections (repeatable; before-after is long: every bundled "
                                   "instance, twice per back end; sat-solver: five SAT configurations; freedom: "
-                                  "three models of six horizons).")
+                                  "three models of six horizons; families: model sizes only).")
 def bench_exact(time_limit: float, threads: int, only) -> int:
     """Exact solvers: time to optimum per map, eager vs lazy connectivity, pruning, presolve;
     with --only before-after, the encoding before and after the reachability with the tiles;
     with --only sat-solver, the SAT back end's solvers and horizons per model; with --only
-    freedom, where a proof's time goes (all schedules against the model's restrictions)."""
+    freedom, where a proof's time goes (all schedules against the model's restrictions); with
+    --only families, where the model's size goes (variables and clauses per constraint family)."""
     from .exact import report
 
     report(time_limit, threads, only or ("optimum", "connectivity", "pruning", "presolve"), echo=click.echo)

@@ -13,6 +13,7 @@
    before) against Glucose and MiniSat, one horizon per model (the default now) and 8.
 7. Where a proof's time goes: the infeasible horizon just below each optimum, for all schedules
    and for the two restrictions of the model (the structure kept, every tile carried once).
+8. Where the model's size goes: variables and clauses per constraint family at those horizons.
 
 Every run gets the same time limit; unfinished runs show their status instead of a time.
 """
@@ -158,12 +159,23 @@ def freedom_table(time_limit: float, threads: int, echo) -> None:
         echo(f"   {name:<12} {T:>3} {' '.join(f'{c:>30}' for c in cells)}")
 
 
+def families_table(time_limit: float, threads: int, echo) -> None:
+    echo("8. where the model's size goes: variables / clauses per constraint family, at the horizon below the "
+         "optimum (thousands)")
+    for name, T in BELOW_OPTIMUM:
+        model = build(load_instance(bundled_path(name)), T, Options())
+        size = model.size()
+        parts = "  ".join(f"{family} {part['variables'] / 1e3:.1f} / {part['clauses'] / 1e3:.1f}"
+                          for family, part in model.families.items())
+        echo(f"   {name:<12} T={T:<3} all {size['variables'] / 1e3:.1f} / {size['clauses'] / 1e3:.1f}:  {parts}")
+
+
 def report(time_limit: float = 120.0, threads: int = 2, sections=("optimum", "connectivity", "pruning", "presolve"),
            echo=print) -> None:
     start = time.perf_counter()
     tables = {"optimum": optimum_table, "connectivity": connectivity_table, "pruning": pruning_table,
               "presolve": presolve_table, "before-after": before_after_table, "sat-solver": sat_solver_table,
-              "freedom": freedom_table}
+              "freedom": freedom_table, "families": families_table}
     for key in sections:
         tables[key](time_limit, threads, echo)
         echo("")
