@@ -224,8 +224,14 @@ class _Builder:
         for i in range(inst.num_robots):
             self.x[(i, 0, self.state.poses[i])] = m.true
             for t in range(1, T + 1):
+                poses = []
                 for p in np.flatnonzero(self.R[i][t]).tolist():
                     self.x[(i, t, p)] = m.var(("x", i, t, p))
+                    poses.append(self.x[(i, t, p)])
+                # one pose at a time: implied by the actions (one per step, each from one pose to
+                # one), and said outright it lets the solver conclude sooner (bridge-3 at T = 13:
+                # 9.4 k conflicts against 26.5 k; bridge-2 at T = 19: 54 k against 69 k)
+                m.exactly_one.append(poses)
 
     def tile(self, t: int, c: int) -> int:
         return self.m.tile.get((t, c), -self.m.true)
