@@ -53,6 +53,9 @@ from .ends import add_end_constraints, end_roles
 from .prune import candidate_cells, change_window, reachable_poses
 
 CONNECTIVITY = ("eager", "lazy", "cuts")
+# the action kinds as plain ints, compared in the inner loops (an enum's attribute lookup there was
+# a third of the time to build a model)
+WAIT, MOTION, PICK, PLACE = (int(k) for k in (Kind.WAIT, Kind.MOTION, Kind.PICK, Kind.PLACE))
 
 
 class OutOfTime(Exception):
@@ -241,7 +244,8 @@ class _Builder:
     def _actions(self) -> None:
         m, T = self.m, self.T
         for i, g in enumerate(self.world.graphs):
-            kinds = g.kind
+            kinds, kind_of = g.kind, g.kind.tolist()
+            manip = np.isin(kinds, (PICK, PLACE))[None, :]
             for t in range(1, T + 1):
                 self.tick()
                 prev, nxt = self.R[i][t - 1], self.R[i][t]
@@ -249,7 +253,6 @@ class _Builder:
                 succ = g.succ[ps]
                 ok = (succ >= 0) & nxt[np.maximum(succ, 0)]
                 tgt = g.target[ps]
-                manip = np.isin(kinds, (Kind.PICK, Kind.PLACE))[None, :]
                 ok &= ~manip | ((tgt >= 0) & self.cand[np.maximum(tgt, 0)])
                 rows, acts = np.nonzero(ok)
                 group = []
@@ -257,7 +260,7 @@ class _Builder:
                     p = int(ps[r])
                     v = m.var(("y", i, t, p, a))
                     group.append((v, p, a))
-                    if kinds[a] == Kind.MOTION:
+                    if kind_of[a] == MOTION:
                         m.motion.append(v)
                 m.y[(i, t)] = group
                 m.exactly_one.append([v for v, _, _ in group])
@@ -286,17 +289,18 @@ class _Builder:
         m, T = self.m, self.T
         picks, places = defaultdict(list), defaultdict(list)
         for i, g in enumerate(self.world.graphs):
+            kind_of = g.kind.tolist()
             for t in range(1, T + 1):
                 was, now = self.carry[(i, t - 1)], self.carry[(i, t)]
                 my_picks, my_places = [], []
                 for v, p, a in m.y[(i, t)]:
-                    kind = g.kind[a]
-                    if kind == Kind.PICK:
+                    kind = kind_of[a]
+                    if kind == PICK:
                         c = int(g.target[p, a])
                         m.clauses += [[-v, -was], [-v, now], [-v, self.tile(t - 1, c)], [-v, -self.tile(t, c)]]
                         picks[(t, c)].append(v)
                         my_picks.append(v)
-                    elif kind == Kind.PLACE:
+                    elif kind == PLACE:
                         c = int(g.target[p, a])
                         m.clauses += [[-v, was], [-v, -now], [-v, -self.tile(t - 1, c)], [-v, self.tile(t, c)]]
                         places[(t, c)].append(v)
@@ -351,7 +355,7 @@ class _Builder:
         """``done[k]``: every robot waits at every step after ``k`` (a clause per later step: a
         chain ``done[k] -> done[k + 1]`` steered the solvers worse, bridge-3 26-30 against 15)."""
         m, first = self.m, max(0, min_done)
-        waits = {(i, t): [v for v, p, a in m.y[(i, t)] if g.kind[a] == Kind.WAIT]
+        waits = {(i, t): [v for v, p, a in m.y[(i, t)] if g.kind[a] == WAIT]
                  for i, g in enumerate(self.world.graphs) for t in range(first + 1, self.T + 1)}
         for k in range(first, self.T + 1):
             d = m.var(("done", k))
