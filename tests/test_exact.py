@@ -331,6 +331,21 @@ def test_an_incumbent_above_the_horizon_cap_is_still_returned(method, optimum):
     assert result.metrics.makespan == opt + 3 and validate(inst, result.schedule).valid
 
 
+@pytest.mark.parametrize("method", ["cpsat", "sat"])
+def test_the_default_cap_gives_way_to_a_longer_incumbent(method, optimum, monkeypatch):
+    # the default cap bounds a search with no schedule to go by; with one, the search goes on up
+    # to it (a cap given stays, as the test above shows)
+    from bille.solvers import exact
+
+    inst = TINY["s5-move-tile"]()  # optimum 9, static bound 6
+    lower = lower_bound(inst).lower
+    monkeypatch.setattr(exact, "default_cap", lambda bound: bound)  # as if the optimum lay beyond it
+    result = solve(inst, method, time_limit=120)
+    assert result.stats["incumbent"]["makespan"] > lower  # the heuristics' schedule, above that cap
+    assert result.status == "optimal" and result.metrics.makespan == result.lower_bound == optimum("s5-move-tile")
+    assert validate(inst, result.schedule).valid
+
+
 @pytest.mark.parametrize("solver", ["glucose42", "minisat22", "cadical195"])
 def test_a_sat_solve_past_its_deadline_answers_unknown_without_solving(solver):
     import time
