@@ -244,8 +244,8 @@ class _Builder:
     def _actions(self) -> None:
         m, T = self.m, self.T
         for i, g in enumerate(self.world.graphs):
-            kinds, kind_of = g.kind, g.kind.tolist()
-            manip = np.isin(kinds, (PICK, PLACE))[None, :]
+            kind_of = g.kind.tolist()
+            manip = np.isin(g.kind, (PICK, PLACE))[None, :]
             for t in range(1, T + 1):
                 self.tick()
                 prev, nxt = self.R[i][t - 1], self.R[i][t]
@@ -325,14 +325,15 @@ class _Builder:
         m = self.m
         if self.inst.num_robots < 2:
             return
+        feet_of = [g.feet.tolist() for g in self.world.graphs]  # robot -> pose -> its feet' cells
         for t in range(1, self.T + 1):
             self.tick()
             users = defaultdict(lambda: defaultdict(dict))  # cell -> robot -> {(literal, conditional?)}
             for i, g in enumerate(self.world.graphs):
                 for v, p, a in m.y[(i, t)]:
                     q = int(g.succ[p, a])
-                    feet = {c: self.x[(i, t, q)] for c in g.feet[q].tolist()}
-                    feet.update({c: self.x[(i, t - 1, p)] for c in g.feet[p].tolist()})
+                    feet = {c: self.x[(i, t, q)] for c in feet_of[i][q]}
+                    feet.update({c: self.x[(i, t - 1, p)] for c in feet_of[i][p]})
                     for c in g.coll[p, a].tolist():
                         if c >= 0:
                             users[c][i][feet.get(c, v), False] = None
