@@ -12,6 +12,7 @@ Scale: S7 robots with random goal cells on a fully tiled square: time to the fir
 from __future__ import annotations
 
 import random
+from importlib import resources
 from pathlib import Path
 
 import numpy as np
@@ -27,6 +28,19 @@ from .core import north_facing
 
 MAPS = ("random-32-32-10", "room-32-32-4", "warehouse-10-20-10-2-1")
 AGENTS = (50, 100, 200, 300, 400)
+SCENARIO = "-random-1.scen"  # NAME.map is read with NAME-random-1.scen
+
+
+def shipped_maps() -> Path:
+    """The folder of the MovingAI maps and scenarios shipped with bille (:data:`MAPS`; see its
+    README for their source and licence)."""
+    return Path(str(resources.files("bille.tools.bench").joinpath("movingai")))
+
+
+def map_names(folder: Path) -> list[str]:
+    """The maps of ``folder`` that have a ``random-1`` scenario, sorted."""
+    return sorted(p.name[: -len(SCENARIO)] for p in folder.glob(f"*{SCENARIO}") if (folder / p.name.replace(
+        SCENARIO, ".map")).is_file())
 
 
 def sum_of_costs(instance: Instance, schedule) -> int:
@@ -59,7 +73,7 @@ def lower_soc(instance: Instance) -> int:
 def mapf_rows(folder: Path, maps=MAPS, agents=AGENTS, time_limit: float = 60.0, improve: float = 0.0):
     """Yield one result row per map and agent count, as soon as it is measured."""
     for name in maps:
-        map_file, scen = folder / f"{name}.map", folder / f"{name}-random-1.scen"
+        map_file, scen = folder / f"{name}.map", folder / f"{name}{SCENARIO}"
         for k in agents:
             try:
                 inst = from_movingai(map_file, scen, agents=k)

@@ -1,0 +1,39 @@
+"""`bille bench mapf` from a fresh clone: the MovingAI maps it uses ship with the package, other
+folders come with --maps, and every schedule it reports is valid."""
+import pytest
+
+from bille.instances.generators.movingai import from_movingai
+from bille.solvers import solve, validate
+from bille.tools.bench.mapf import MAPS, SCENARIO, map_names, shipped_maps, sum_of_costs
+from bille.tools.cli import main
+
+
+def run(capsys, *argv):
+    with pytest.raises(SystemExit) as info:
+        main(list(argv))
+    out, err = capsys.readouterr()
+    return info.value.code, out, err
+
+
+def test_the_default_maps_ship_with_their_scenarios_and_source():
+    folder = shipped_maps()
+    assert set(MAPS) <= set(map_names(folder))
+    readme = (folder / "README.md").read_text()
+    assert "movingai.com" in readme and "Licence" in readme
+
+
+def test_bench_mapf_runs_on_the_shipped_maps(capsys):
+    code, out, err = run(capsys, "bench", "mapf", "--names", "room-32-32-4", "--agents", "5")
+    assert code == 0 and "room-32-32-4" in out and "feasible" in out, err
+    inst = from_movingai(shipped_maps() / "room-32-32-4.map", shipped_maps() / f"room-32-32-4{SCENARIO}", agents=5)
+    result = solve(inst, "lacam", improve=0.0)
+    assert validate(inst, result.schedule).valid and sum_of_costs(inst, result.schedule) > 0
+
+
+def test_bench_mapf_reads_another_folder_and_names_what_is_missing(capsys, tmp_path):
+    for suffix in (".map", SCENARIO):
+        (tmp_path / f"mine{suffix}").write_bytes((shipped_maps() / f"random-32-32-10{suffix}").read_bytes())
+    code, out, _ = run(capsys, "bench", "mapf", "--maps", str(tmp_path), "--agents", "3")
+    assert code == 0 and "mine" in out
+    code, out, err = run(capsys, "bench", "mapf", "--maps", str(tmp_path), "--names", "nowhere", "--agents", "3")
+    assert code == 2 and out == "" and "nowhere" in err and "Traceback" not in err
