@@ -228,22 +228,31 @@ def bench_crowd(size: int, robots: int, horizon: int, seed: int) -> int:
 
 
 @bench.command("mapf")
-@click.option("--folder", type=click.Path(file_okay=False, exists=True), default="../shared/movingai",
-              show_default=True, help="Folder of MovingAI .map files and their -random-1.scen scenarios.")
-@click.option("--maps", default="random-32-32-10,room-32-32-4,warehouse-10-20-10-2-1", show_default=True)
+@click.option("--maps", "folder", type=click.Path(file_okay=False, exists=True), default=None,
+              help="Folder of MovingAI NAME.map files with their NAME-random-1.scen scenarios "
+                   "(default: the three maps shipped with bille).")
+@click.option("--names", default=None, help="Comma-separated map names in that folder (default: the shipped "
+              "random-32-32-10, room-32-32-4, warehouse-10-20-10-2-1, or every map of --maps).")
 @click.option("--agents", default="50,100,200,300,400", show_default=True, help="Comma-separated agent counts.")
 @click.option("--time-limit", type=click.FloatRange(min=0.1), default=60.0, show_default=True)
 @click.option("--improve", type=click.FloatRange(min=0), default=0.0, show_default=True,
               help="Seconds LaCAM* improves its first schedule.")
-def bench_mapf(folder: str, maps: str, agents: str, time_limit: float, improve: float) -> int:
+def bench_mapf(folder: str | None, names: str | None, agents: str, time_limit: float, improve: float) -> int:
     """Classic MAPF on MovingAI maps: LaCAM*'s success, sum of costs, makespan and time."""
     from pathlib import Path
 
-    from .mapf import mapf_rows, mapf_table
+    from .mapf import MAPS, map_names, mapf_rows, mapf_table, shipped_maps
 
     counts = _counts(agents, "--agents", "agent counts")
+    where = shipped_maps() if folder is None else Path(folder)
+    found = map_names(where)
+    chosen = _names(names) if names is not None else (list(MAPS) if folder is None else found)
+    missing = [n for n in chosen if n not in found]
+    if missing or not chosen:
+        raise click.BadParameter(f"{', '.join(missing) or 'no map'}: expected NAME.map and NAME-random-1.scen in "
+                                 f"{where} (found: {', '.join(found) or 'none'})", param_hint="--names")
     rows = []
-    for row in mapf_rows(Path(folder), _names(maps), counts, time_limit, improve):
+    for row in mapf_rows(where, chosen, counts, time_limit, improve):
         rows.append(row)
         click.echo(f"{row['map']} {row['agents']} agents: {row['status']} {row.get('reason', '')}".rstrip(), err=True)
     for line in mapf_table(rows):
