@@ -1,6 +1,7 @@
 """``bille run`` and ``bille robot-sim``: the command line of the execution layer."""
 from __future__ import annotations
 
+import json
 import logging
 import os
 import sys
@@ -108,6 +109,15 @@ def run(instance, schedule, journal_in, replan, broker, bind, robots, secrets_pa
             raise click.UsageError("give either INSTANCE SCHEDULE or --resume JOURNAL, not both")
         path = Path(journal_in)
         done = session.replay(path)
+        if done.done:  # nothing to send: say so, as the run's own end did
+            if replan:
+                raise ExecutionError(f"{path}: the run is complete (all {done.finished} steps); nothing to re-plan")
+            if as_json:
+                click.echo(json.dumps({"status": "completed", "steps": done.finished, "finished": done.finished,
+                                       "executed": 0, "journal": str(path)}))
+            else:
+                click.echo(f"completed: the run of {path} is finished (all {done.finished} steps); nothing to resume")
+            return EXIT_OK
         with _Progress(not as_json and sys.stderr.isatty(), done.plan.shape[1]) as bar:
             out = session.resume(journal_in, broker=broker, secrets_path=secrets_path, settings=settings, sims=sims,
                                  replan=replan, host=bind, progress=bar, done=done)

@@ -21,7 +21,7 @@ from bille.solvers import bind, validate
 from .broker import BrokerURL, EmbeddedBroker, parse_url
 from .executor import Settings, load_secrets, run_plan
 from .outcome import Outcome
-from .journal import Journal, Replayed, replay, sha256_file
+from .journal import Journal, Replayed, fleet_secret, replay, sha256_file
 from .protocol import ExecutionError
 
 SECRET_ENV = "BILLE_ROBOT_SECRET"
@@ -116,7 +116,7 @@ def start(instance: Instance, instance_path: str, schedule, schedule_path: str, 
             "schedule": str(Path(schedule_path).resolve()), "schedule_sha256": sha256_file(schedule_path),
             "fleet": settings.get("fleet", "default"), "robots": ids, "simulated": simulate, "broker": broker,
             "secrets": str(Path(secrets_path).resolve()) if secrets_path else None, "steps": int(plan.shape[1])}
-    journal = Journal(journal_path)
+    journal = Journal(journal_path, secret=fleet_secret())
     try:
         journal.write("run", **head)
         with ExitStack() as stack:
@@ -140,7 +140,7 @@ def resume(journal_path: str, *, broker: str | None, secrets_path: str | None, s
     done = done if done is not None else replay(journal_path)
     head = done.run
     if done.done:
-        raise ExecutionError(f"{journal_path}: the run is complete (step {done.finished}); nothing to resume")
+        raise ExecutionError(f"{journal_path}: the run is complete (all {done.finished} steps); nothing to resume")
     ids = head["robots"]
     broker = broker if broker is not None else head["broker"]
     keys = None if head["simulated"] else _secrets(secrets_path or head["secrets"], ids)
@@ -149,7 +149,7 @@ def resume(journal_path: str, *, broker: str | None, secrets_path: str | None, s
         url = stack.enter_context(broker_at(broker, host))
         if head["simulated"]:
             keys = stack.enter_context(simulated(ids, url, head["fleet"], sims or SimOptions()))
-        journal = Journal(journal_path, append=True)
+        journal = Journal(journal_path, append=True, secret=fleet_secret(), previous=done.signature)
         stack.callback(journal.close)
         journal.write("resume", finished=done.finished, released=done.released)
         return run_plan(done.instance, done.plan, Settings(url=url, robots=ids, secrets=keys, **settings), journal,
