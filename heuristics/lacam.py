@@ -128,8 +128,8 @@ class PoseSpace:
     def is_goal(self, config: Poses) -> bool:
         return self.problem.is_goal(config)
 
-    def resting(self, i: int, config: Poses) -> bool:
-        return self.problem.at_goal(i, config[i])
+    def resting_all(self, config: Poses) -> list[bool]:
+        return [home[p] for home, p in zip(self.problem.home_lists, config)]
 
     def first_priorities(self, config: Poses) -> list[float]:
         return [d[p] / 10_000 for d, p in zip(self.problem.dist_lists, config)]
@@ -170,7 +170,7 @@ class _LaCAM:
         if parent is None:
             priority = space.first_priorities(config)
         else:
-            priority = next_priorities(parent.priority, (space.resting(i, config) for i in range(self.m)))
+            priority = next_priorities(parent.priority, space.resting_all(config))
         order = sorted(range(self.m), key=lambda i: -priority[i])
         node = _Node(config, parent, actions, g, space.h(config), priority, order)
         node.tree.append(())

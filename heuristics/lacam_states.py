@@ -96,12 +96,10 @@ class StateSpace:
     def is_goal(self, config: tuple) -> bool:
         return goal_violation(self.world, self.states[config], self.goal_tiles, self.goal_cells, 0) is None
 
-    def resting(self, i: int, config: tuple) -> bool:
+    def resting_all(self, config: tuple) -> list[bool]:
         state = self.states[config]
-        if state.carrying[i]:
-            return False
-        cell = self.goal_cells[i]
-        return cell < 0 or int(self.world.graphs[i].feet[state.poses[i], 0]) == cell
+        return [not carrying and (cell < 0 or int(g.feet[p, 0]) == cell)
+                for g, p, carrying, cell in zip(self.world.graphs, state.poses, state.carrying, self.goal_cells)]
 
     def first_priorities(self, config: tuple) -> list[float]:
         return [0.0] * self.m

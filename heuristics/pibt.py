@@ -138,13 +138,23 @@ class Bille(_Generator):
 class Classic(_Generator):
     """PIBT with classic collisions (point robots): vertex and swap conflicts only, with
     lacam3's *swap* emulation (Okumura, AAMAS 2024): where two robots must pass each other in a
-    corridor, one pulls the other along into a branch instead of both pushing head-on."""
+    corridor, one pulls the other along into a branch instead of both pushing head-on.
+
+    A point robot's pose is its cell, so the poses next to each pose (``nbrs``) are read once
+    from the first robot's walk; every robot walks on the same structure."""
+
+    def __init__(self, problem, rng: random.Random) -> None:
+        super().__init__(problem, rng)
+        walk = problem.walks[0]
+        self.nbrs = [[q for q in row if q >= 0 and q != v] if standing else []
+                     for v, (row, standing) in enumerate(zip(walk.succ.tolist(), walk.standing.tolist()))]
 
     def generate(self, config: Poses, order: list[int], forced: tuple,
                  pinned: dict[int, frozenset]) -> tuple[tuple[int, ...], Poses] | None:
         m = len(config)
         self.config = config
-        self.moves = [self.problem.moves(i, p) for i, p in enumerate(config)]
+        moves = self.problem.moves
+        self.moves = [moves(i, p) for i, p in enumerate(config)]
         self.here = {p: i for i, p in enumerate(config)}
         self.next_at: dict[int, int] = {}
         self.choice: list[int | None] = [None] * m
@@ -175,21 +185,23 @@ class Classic(_Generator):
 
     def _decide(self, i: int, pusher: int | None) -> bool:
         dist = self.problem.dist_lists[i]
-        here = self.here
-        ranked = sorted((dist[q], q in here and here[q] != i, self.rng.random(), k)
-                        for k, (_, q, _) in enumerate(self.moves[i]))
-        puller = self._swap_partner(i, self.moves[i][ranked[0][3]][1])
+        here, rand = self.here, self.rng.random
+        moves = self.moves[i]
+        # by distance, then cells nobody stands on, then at random (one float keeps that order)
+        ranked = sorted((4 * dist[q] + (2 if q in here and here[q] != i else 0) + rand(), k)
+                        for k, (_, q, _) in enumerate(moves))
+        puller = self._swap_partner(i, moves[ranked[0][1]][1])
         if puller is not None:
             ranked.reverse()  # make way first: the partner follows into i's cell
-        for rank, (*_, k) in enumerate(ranked):
-            q = self.moves[i][k][1]
+        for rank, (_, k) in enumerate(ranked):
+            q = moves[k][1]
             if q in self.next_at:
                 continue
             if pusher is not None and q == self.config[pusher]:
                 continue  # no swap with the robot that pushes
             if self._swaps(i, q):
                 continue  # the robot at q already moves into i's cell
-            j = self.here.get(q)
+            j = here.get(q)
             self._claim(i, k)
             if j is not None and j != i and self.choice[j] is None:
                 if not self._decide(j, i):  # j stays where i wanted to go
@@ -214,9 +226,6 @@ class Classic(_Generator):
         if k is not None:
             self._claim(j, k)
 
-    def _neighbours(self, v: int) -> list[int]:
-        return [q for _, q, _ in self.problem.moves(0, v) if q != v]
-
     def _swap_partner(self, i: int, best: int) -> int | None:
         """The robot that should pass ``i`` by being pulled along, if any: the robot on ``i``'s
         best next cell when the two must pass each other and a branch ahead allows it; or (a
@@ -228,10 +237,12 @@ class Classic(_Generator):
                 and self._can_pass(best, v)):
             return j
         if best != v:
-            for u in self._neighbours(v):
+            dists = self.problem.dist_lists
+            for u in self.nbrs[v]:
                 k = here.get(u)
-                if (k is not None and self.config[k] != best and self._must_pass(k, i, v, best)
-                        and self._can_pass(best, v)):
+                # k must pass i only if best brings k closer (else the corridor walk stops at once)
+                if (k is not None and u != best and dists[k][best] < dists[k][v]
+                        and self._must_pass(k, i, v, best) and self._can_pass(best, v)):
                     return k
         return None
 
@@ -239,10 +250,14 @@ class Classic(_Generator):
         """How many ways lead on from ``at`` (not back to ``came``, nor into a dead end where a
         robot rests at its goal), and one of them."""
         n, way = 0, None
-        for u in self._neighbours(at):
-            k = self.here.get(u)
-            if u == came or (k is not None and len(self._neighbours(u)) == 1 and self.problem.at_goal(k, u)):
+        nbrs, here, at_goal = self.nbrs, self.here, self.problem.at_goal
+        for u in nbrs[at]:
+            if u == came:
                 continue
+            if len(nbrs[u]) == 1:
+                k = here.get(u)
+                if k is not None and at_goal(k, u):
+                    continue
             n, way = n + 1, u
         return n, way
 

@@ -58,9 +58,16 @@ class Walk:
         first. Cached per pose: the planners' inner loops read Python tuples, not numpy rows."""
         out = self._moves.get(pose)
         if out is None:
-            row = self.succ[pose]
+            row = self.succ[pose].tolist()
             order = [self.wait] + [a for a in range(len(row)) if a != self.wait]
-            out = [(a, int(row[a]), self.cells(pose, a)) for a in order if row[a] >= 0]
+            g = self.graph
+            coll = g.coll[pose].tolist()  # one row per pose: numpy is slow per element
+            carry = g.carry[pose].tolist() if self.carrying else None
+            out = []
+            for a in order:
+                if row[a] >= 0:
+                    cells = coll[a] + carry[a] if carry is not None else coll[a]
+                    out.append((a, row[a], frozenset(c for c in cells if c >= 0)))
             self._moves[pose] = out
         return out
 
