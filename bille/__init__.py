@@ -5,9 +5,14 @@ The layers are subpackages: :mod:`bille.instances` (the problem, the rules, file
 :mod:`bille.solvers` (``solve()``, the validator, bounds, exact and anytime solving) and
 :mod:`bille.tools` (the command line). ``python -m bille`` is the ``bille`` command.
 """
-from importlib.metadata import PackageNotFoundError, version
 
-try:
-    __version__ = version("bille")
-except PackageNotFoundError:  # run from a source tree that is not installed
-    __version__ = "0+unknown"
+
+def __getattr__(name: str):
+    if name == "__version__":  # read on use: importlib.metadata is slow to load
+        from importlib.metadata import PackageNotFoundError, version
+
+        try:
+            return version("bille")
+        except PackageNotFoundError:  # run from a source tree that is not installed
+            return "0+unknown"
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

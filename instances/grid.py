@@ -10,7 +10,6 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
-from scipy import ndimage
 
 OBSTACLE, EMPTY, TILE = "#", ".", "T"
 CELL_CHARS = (OBSTACLE, EMPTY, TILE)
@@ -105,6 +104,8 @@ def neighbour_table(width: int, height: int) -> np.ndarray:
 
 def components(tiles: np.ndarray, width: int, height: int) -> tuple[np.ndarray, int]:
     """Label the 4-connected components of a flat tile mask: ``(labels, count)``, 0 = no tile."""
+    from scipy import ndimage  # here, not at the top: the commands that do not judge start faster
+
     labels, count = ndimage.label(tiles.reshape(height, width), structure=_FOUR)
     return labels.reshape(-1), int(count)
 

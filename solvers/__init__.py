@@ -1,7 +1,9 @@
 """The answer: schedules and their files, the validator, metrics, results, and ``solve()``.
 
 ``METHODS`` maps a method name to its planning function ``plan(instance, **options) -> Result``;
-the command line and the parametrized tests read it.
+the command line and the parametrized tests read it. A method's module is imported when the method
+is first looked up, and the bounds (scipy) when a solve needs them, so that commands that do not
+solve start fast.
 """
 from __future__ import annotations
 
@@ -13,7 +15,6 @@ from bille.instances.metrics import Metrics, metrics
 from bille.instances.result import STATUSES, Result
 from bille.instances.schedule import Schedule, bind, dump_schedule, load_schedule, save_schedule, schedule_from_text
 
-from .bounds import Bounds, lower_bound
 from .options import check_options
 from .registry import CLASSIC, METHODS
 from .validate import Report, validate
@@ -46,6 +47,8 @@ def solve(instance: Instance, method: str, progress=None, **options) -> Result:
         raise OptionError(f"instance '{instance.name}' uses classic collisions; {method} plans under the Bill-E "
                           f"rule only (classic: {', '.join(CLASSIC)})")
     options = check_options(method, plan, options, internal=("bounds", "progress"))
+    from .bounds import lower_bound
+
     start = _time.perf_counter()
     bounds = lower_bound(instance)
     accepted = _inspect.signature(plan).parameters
@@ -69,7 +72,15 @@ def solve(instance: Instance, method: str, progress=None, **options) -> Result:
     return Result(**fields)
 
 
-def _lower(result: Result, bounds: Bounds) -> int | None:
+def __getattr__(name: str):
+    if name in ("Bounds", "lower_bound"):  # imported on use: scipy is slow to load
+        from . import bounds
+
+        return getattr(bounds, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def _lower(result: Result, bounds) -> int | None:
     """The best lower bound known: the static one, or the method's proof if higher. None for a
     proof that no schedule exists."""
     if result.status == "infeasible":
@@ -77,7 +88,7 @@ def _lower(result: Result, bounds: Bounds) -> int | None:
     return max(bounds.lower, result.lower_bound or 0)
 
 
-def _contradiction(fields: dict, result: Result, bounds: Bounds) -> None:
+def _contradiction(fields: dict, result: Result, bounds) -> None:
     """Turn a result whose proofs contradict its valid schedule into status ``error``."""
     makespan, lower, stats = fields["metrics"].makespan, fields["lower_bound"], fields["stats"]
     why = None
@@ -91,8 +102,3 @@ def _contradiction(fields: dict, result: Result, bounds: Bounds) -> None:
         fields["status"] = "error"
         stats["contradiction"] = why
 
-
-__all__ = [
-    "METHODS", "Metrics", "Report", "Result", "STATUSES", "Schedule", "bind", "dump_schedule",
-    "load_schedule", "metrics", "save_schedule", "schedule_from_text", "solve", "validate",
-]

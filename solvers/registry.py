@@ -1,20 +1,21 @@
 """The method registry: method name -> ``plan(instance, **options) -> Result``.
 
-An explicit dict, in the order shown to users. The paper's planners walk on a fixed structure;
+An explicit table, in the order shown to users, of where each planning function lives
+(``"module:function"``): a method's module, and the libraries it needs (OR-Tools, python-sat),
+are imported when the method is first looked up, not when the command line starts. The paper's planners walk on a fixed structure;
 on an instance that moves tiles, ``temporal-astar`` and ``mstar`` are the motion layer of the
 reconfiguration loop (:mod:`bille.heuristics.reconfigure`). Which function serves an instance is
 decided here, not by the planners.
 """
 from __future__ import annotations
 
+import importlib
 import time
-from typing import Callable
+from collections.abc import MutableMapping
+from typing import Callable, Iterator
 
-from bille.heuristics import astar, lacam, lacam_states, mstar, reconfigure, temporal_astar
 from bille.instances import Instance, OptionError
 from bille.instances.result import Result
-
-from . import anytime, bfs, exact
 
 
 def plan_temporal_astar(instance: Instance, *, epsilon: float = 1.0, horizon: int = 5,
@@ -25,6 +26,8 @@ def plan_temporal_astar(instance: Instance, *, epsilon: float = 1.0, horizon: in
     """Temporal A* (:func:`bille.heuristics.temporal_astar.plan`); on an instance that moves tiles,
     the reconfiguration loop with Temporal A* as its motion layer (``load_transfer``, ``d_tr``:
     equations (1)-(3) of the paper; ``active``: the robots that take jobs)."""
+    from bille.heuristics import reconfigure, temporal_astar
+
     if instance.is_reconfiguration:
         if not shift_priorities:
             raise OptionError("temporal-astar: shift_priorities=false is for path planning only")
@@ -43,6 +46,8 @@ def plan_mstar(instance: Instance, *, epsilon: float = 1.0, od: bool = True, tim
     """M* (:func:`bille.heuristics.mstar.plan`); on an instance that moves tiles, the
     reconfiguration loop with M* as its motion layer (``load_transfer``, ``d_tr``, ``max_steps``,
     ``active`` as for the loop)."""
+    from bille.heuristics import mstar, reconfigure
+
     if instance.is_reconfiguration:
         return reconfigure.plan(instance, motion="mstar", load_transfer=load_transfer, d_tr=d_tr, epsilon=epsilon,
                                 time_limit=time_limit, max_steps=max_steps, active=active)
@@ -68,6 +73,8 @@ def plan_lacam(instance: Instance, *, objective: str = "makespan", time_limit: f
     finds a schedule whenever one exists (time and memory permitting) and proves ``infeasible``
     when its space is exhausted. ``objective`` is for path planning; ``improve``, ``max_nodes``
     and ``seed`` for the searches over configurations."""
+    from bille.heuristics import lacam, lacam_states, reconfigure
+
     if not instance.is_reconfiguration:
         _loop_only("lacam", active=active)
         return lacam.plan(instance, objective=objective, time_limit=time_limit, improve=improve,
@@ -102,13 +109,41 @@ def _loop_only(method: str, **options) -> None:
 
 CLASSIC = ("astar", "lacam", "bfs")  # the methods that plan under classic collisions (DESIGN §3)
 
-METHODS: dict[str, Callable[..., Result]] = {
-    "astar": astar.plan,
-    "mstar": plan_mstar,
-    "temporal-astar": plan_temporal_astar,
-    "lacam": plan_lacam,
-    "cpsat": exact.plan_cpsat,
-    "sat": exact.plan_sat,
-    "anytime": anytime.plan,
-    "bfs": bfs.plan,
-}
+class Registry(MutableMapping):
+    """Method name -> planning function, each imported from ``"module:function"`` when it is
+    first looked up. Iterating gives the names without importing anything; a function may also
+    be set directly (tests replace a method this way)."""
+
+    def __init__(self, where: dict[str, str]) -> None:
+        self._where: dict[str, str | Callable[..., Result]] = dict(where)
+
+    def __getitem__(self, name: str) -> Callable[..., Result]:
+        plan = self._where[name]
+        if isinstance(plan, str):
+            module, _, function = plan.partition(":")
+            plan = self._where[name] = getattr(importlib.import_module(module), function)
+        return plan
+
+    def __setitem__(self, name: str, plan: Callable[..., Result]) -> None:
+        self._where[name] = plan
+
+    def __delitem__(self, name: str) -> None:
+        del self._where[name]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._where)
+
+    def __len__(self) -> int:
+        return len(self._where)
+
+
+METHODS = Registry({
+    "astar": "bille.heuristics.astar:plan",
+    "mstar": f"{__name__}:plan_mstar",
+    "temporal-astar": f"{__name__}:plan_temporal_astar",
+    "lacam": f"{__name__}:plan_lacam",
+    "cpsat": "bille.solvers.exact:plan_cpsat",
+    "sat": "bille.solvers.exact:plan_sat",
+    "anytime": "bille.solvers.anytime:plan",
+    "bfs": "bille.solvers.bfs:plan",
+})

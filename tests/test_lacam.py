@@ -197,6 +197,7 @@ def test_whole_state_search_improves_to_the_brute_force_optimum(inst):
 def test_a_loop_out_of_its_share_of_the_time_hands_over_to_the_complete_search(monkeypatch):
     """The loop gets part of the time limit; when it runs out of it (its motion layer finds no
     joint plan), the whole-state search still gets the rest and finds the schedule."""
+    from bille.heuristics import reconfigure
     from bille.instances.result import Result
     from bille.solvers import registry
 
@@ -206,7 +207,7 @@ def test_a_loop_out_of_its_share_of_the_time_hands_over_to_the_complete_search(m
         given.append(time_limit)
         return Result("lacam", "timeout", stats={"failure": "LaCAM* found no joint plan (timeout)"})
 
-    monkeypatch.setattr(registry.reconfigure, "plan", stuck)
+    monkeypatch.setattr(reconfigure, "plan", stuck)
     name = next(i.name for i in TINY_RECONFIGURATION if brute_force(i.name).status == "optimal")
     inst = next(i for i in TINY_RECONFIGURATION if i.name == name)
     result = solve(inst, "lacam", time_limit=20, improve=0.0)

@@ -6,7 +6,6 @@ infeasible, timeout without schedule), 2 bad input or usage. A user error is one
 from __future__ import annotations
 
 import sys
-from importlib.metadata import version
 
 import click
 
@@ -24,7 +23,7 @@ from .view_commands import view
 
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100})
-@click.version_option(version("bille"), "--version", prog_name="bille", message="%(prog)s %(version)s")
+@click.version_option(None, "--version", package_name="bille", prog_name="bille", message="%(prog)s %(version)s")
 def cli() -> None:
     """Multi-robot reconfiguration of 2D tile structures by Bill-E inchworm robots.
 

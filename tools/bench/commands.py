@@ -2,6 +2,7 @@
 baselines of the same run."""
 from __future__ import annotations
 
+import json
 import time
 from pathlib import Path
 
@@ -64,6 +65,36 @@ def bench_anytime(time_limit: float, maps: str) -> int:
         bundled_path(name)  # unknown names fail here, before any work
     found = rows(names, time_limit, progress=lambda name: click.echo(f"  {name} ...", err=True))
     for line in table(found):
+        click.echo(line)
+    return EXIT_OK
+
+
+@bench.command("imports", context_settings={"ignore_unknown_options": True})
+@click.argument("argv", nargs=-1, type=click.UNPROCESSED)
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object (modules, edges, pairs).")
+def bench_imports(argv, as_json: bool) -> int:
+    """Our modules that one command loads, and the imports between them: run 'bille ARGV' in a
+    fresh interpreter (default: solve lt-4 -m anytime --time-limit 10) and count modules, import
+    edges and pairs of modules that import each other."""
+    from .importgraph import graph, report
+
+    argv = list(argv) or ["solve", "lt-4", "-m", "anytime", "--time-limit", "10"]
+    if as_json:
+        click.echo(json.dumps(graph(argv)))
+        return EXIT_OK
+    for line in report(argv):
+        click.echo(line)
+    return EXIT_OK
+
+
+@bench.command("startup")
+@click.option("--runs", type=click.IntRange(min=1), default=5, show_default=True, help="Runs of each command.")
+def bench_startup(runs: int) -> int:
+    """Start-up of the commands that do not solve: median seconds of each in a fresh
+    interpreter, and the ratio to importing numpy, click, yaml and rich in the same rounds."""
+    from .startup import report
+
+    for line in report(runs):
         click.echo(line)
     return EXIT_OK
 

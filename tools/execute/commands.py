@@ -12,9 +12,7 @@ from pathlib import Path
 
 import click
 
-from .executor import POLICIES
-from .outcome import dumps, summary_lines
-from .protocol import ExecutionError
+from .outcome import POLICIES, dumps, summary_lines
 
 EXIT_OK, EXIT_NO = 0, 1
 
@@ -97,6 +95,7 @@ def run(instance, schedule, journal_in, replan, broker, bind, robots, secrets_pa
     from bille.solvers import METHODS, load_schedule
 
     from . import session
+    from .protocol import ExecutionError
 
     if replan_method not in METHODS:
         raise ExecutionError(f"--replan-method: unknown method {replan_method!r} (expected one of: {', '.join(METHODS)})")
@@ -171,6 +170,7 @@ def robot_sim(robot_id, broker, fleet, secret_env, secrets_path, fault_rate, del
     state (the reference implementation of the robot side, see docs/execution.md)."""
     from .broker import parse_url
     from .executor import load_secrets
+    from .protocol import ExecutionError
     from .robot import Faults, serve
 
     url = parse_url(broker)

@@ -33,7 +33,6 @@ from .recovery import Recovery
 from .transport import Transport
 
 log = logging.getLogger("bille.execute")
-POLICIES = ("stop", "retry", "replan")
 
 
 @dataclass

@@ -6,6 +6,8 @@ import statistics
 from dataclasses import dataclass, field
 from pathlib import Path
 
+POLICIES = ("stop", "retry", "replan")  # what the executor does after a fault
+
 
 @dataclass
 class Fault:

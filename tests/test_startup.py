@@ -1,0 +1,54 @@
+"""Commands that do not solve start fast: they import no solver library (DESIGN §5).
+
+The commands run one after another in one fresh interpreter, which records after each the
+modules it has loaded by then (so a heavy import is blamed on the first command that made it).
+"""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+HEAVY = ("ortools", "pysat", "rerun", "matplotlib", "dask", "distributed", "scipy.optimize")
+PROBE = """
+import json, sys
+from bille.tools.cli import main
+loaded = []
+for argv in json.loads(sys.argv[1]):
+    try:
+        main(argv)
+    except SystemExit:
+        pass
+    loaded.append(sorted(sys.modules))
+sys.__stdout__.write("\\n" + json.dumps(loaded) + "\\n")
+"""
+
+
+def test_light_commands_import_no_solver_library(tmp_path):
+    commands = [["--help"], ["list"], ["show", "point-4"], ["check", "point-4", "point-4.schedule"],
+                ["solve", "--help"], ["convert", "point-4", str(tmp_path / "p4.mrp.yaml")]]
+    done = subprocess.run([sys.executable, "-c", PROBE, json.dumps(commands)], capture_output=True, text=True)
+    loaded = json.loads(done.stdout.strip().splitlines()[-1])
+    assert (tmp_path / "p4.mrp.yaml").exists()  # the commands ran
+    for argv, modules in zip(commands, loaded):
+        heavy = sorted(m for m in modules if any(m == h or m.startswith(h + ".") for h in HEAVY))
+        assert not heavy, f"bille {' '.join(argv)} imported {heavy}"
+
+
+def test_a_method_is_imported_when_it_is_looked_up():
+    code = ("import sys; from bille.solvers import METHODS; before = 'bille.solvers.exact' in sys.modules; "
+            "names = list(METHODS); plan = METHODS['cpsat']; "
+            "print(before, 'cpsat' in names, 'bille.solvers.exact' in sys.modules, plan.__name__)")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert done.stdout.split() == ["False", "True", "True", "plan_cpsat"]
+
+
+def test_the_import_graph_of_a_command():
+    from bille.tools.bench.importgraph import graph
+
+    g = graph(["show", "point-4"])
+    assert "bille.tools.cli" in g["modules"] and "bille.instances.grid" in g["modules"]
+    assert "bille.solvers.exact" not in g["modules"]
+    assert ("bille.tools.cli", "bille.tools.files_commands") in g["edges"]
+    assert all(a in g["modules"] and b in g["modules"] for a, b in g["edges"])
+    assert all((a, b) in g["edges"] and (b, a) in g["edges"] for a, b in g["both_ways"])
