@@ -125,3 +125,42 @@ def test_binary_files_are_named_not_decoded(tmp_path, rejects, option):
 def test_crowded_gives_up_at_once_when_the_robots_cannot_fit(tmp_path, rejects):
     rejects(["gen", "crowded", "--width", "100", "--height", "100", "--robots", "5000", "--moveset", "point"],
             "no crowded 100x100 map with 5000 robots", tmp_path / "c.yaml")
+
+
+SWEEP = "instances: [crowded-3]\nmethods: {temporal-astar: {}}\n"
+
+
+@pytest.mark.parametrize("text, message", [
+    ("name: ../../../esc3\n" + SWEEP, "name: '../../../esc3' is not a safe file name"),
+    ("name: /tmp/abs\n" + SWEEP, "name: '/tmp/abs' is not a safe file name"),
+    ('name: "a\\0b"\n' + SWEEP, "is not a safe file name"),
+    ("name: ..\n" + SWEEP, "name: '..' is not a safe file name"),
+    ("name: [x]\n" + SWEEP, "name: ['x'] is not a safe file name"),
+    (SWEEP + "methods: {mstar: {}}\n", "s.yaml:3: duplicate key 'methods'"),
+    ("instances: [crowded-3, lt-4, crowded-3]\nmethods: {mstar: {}}\n",
+     "instances[2]: 'crowded-3' is the same instance as 'crowded-3'"),
+    ("instances: [crowded-3]\nmethods: {temporal-astar: {horizon: [2, 5, 2]}}\n",
+     "methods.temporal-astar: the options {'horizon': 2} are listed twice"),
+    ("instances: [{gen: 'random --seed 0..100000000'}]\nmethods: {mstar: {}}\n",
+     "100000001 instances x 1 method configurations make 100000001 runs, more than max_runs 10000"),
+    ("instances: [{gen: 'random --seed 0..3'}]\nmax_runs: 7\nmethods: {mstar: {}, astar: {}}\n",
+     "4 instances x 2 method configurations make 8 runs, more than max_runs 7"),
+    ("instances: [crowded-3]\nmethods: {temporal-astar: {horizon: [1, 2, 3, 4], epsilon: [1, 2, 3]}}\nmax_runs: 10\n",
+     "methods.temporal-astar: 12 option combinations, more than max_runs allows"),
+    ("instances: [{gen: 'random --seed 5..3'}]\nmethods: {mstar: {}}\n", "--seed 5..3: an empty range"),
+    ("instances: [crowded-3]\nmethods: {mstar: {}}\nmax_runs: 0\n", "max_runs: expected a positive whole number"),
+])
+def test_bad_sweep_files_are_refused_before_anything_runs(tmp_path, rejects, monkeypatch, text, message):
+    monkeypatch.chdir(tmp_path)
+    spec = tmp_path / "s.yaml"
+    spec.write_text(text)
+    rejects(["sweep", spec], message)
+    assert [p.name for p in tmp_path.iterdir()] == ["s.yaml"]
+
+
+def test_max_runs_allows_more(tmp_path):
+    from bille.tools.sweep.spec import load_spec
+
+    spec = tmp_path / "s.yaml"
+    spec.write_text("instances: [{gen: 'random --seed 0..3'}]\nmax_runs: 8\nmethods: {mstar: {}, astar: {}}\n")
+    assert len(load_spec(spec).runs) == 8
