@@ -35,9 +35,12 @@ from bille.instances import Instance, OptionError
 
 from .joint import NO_WALK, JointProblem, to_result
 from .pibt import Bille, Classic, next_priorities
+from .scatter import scatter
 
 OBJECTIVES = ("makespan", "sum-of-loss")
 RESTART = 0.001  # chance per iteration, while improving, to go back to the start configuration
+SCATTER_MARGIN = 10  # steps an SUO path may take beyond the shortest (lacam3's default)
+SCATTER_SHARE = 0.5  # of the time limit, at most, for the SUO paths (lacam3's share)
 Poses = tuple[int, ...]
 
 
@@ -92,11 +95,15 @@ def joint_plan(problem: JointProblem, *, objective: str = "makespan", time_limit
         raise OptionError(f"lacam: unknown objective '{objective}' (expected one of: {', '.join(OBJECTIVES)})")
     if improve < 0:
         raise OptionError(f"lacam: improve must be >= 0 seconds, got {improve}")
+    start = time.perf_counter()
     rng = random.Random(seed)
     space = PoseSpace(problem, objective, rng, pinned or {})
     stats = {"objective": f"{objective}, walking only (no pick or place)"}
+    if space.classic and not pinned and all(c >= 0 for c in problem.goals):
+        space.spread(None if time_limit is None else start + SCATTER_SHARE * time_limit, seed)
+        stats["scatter_s"] = round(time.perf_counter() - start, 6)
     status, steps, stats = search(space, rng, time_limit=time_limit, improve=improve, max_nodes=max_nodes,
-                                  stats=stats)
+                                  stats=stats, start=start)
     if status == "exhausted":
         stats["failure"] = NO_WALK
         status = "unsolved"
@@ -111,7 +118,16 @@ class PoseSpace:
         self.problem, self.pinned = problem, pinned
         self.m = len(problem.walks)
         self.makespan = objective == "makespan"
-        self.generator = (Classic if problem.instance.collisions == "classic" else Bille)(problem, rng)
+        self.classic = problem.instance.collisions == "classic"
+        self.generator = (Classic if self.classic else Bille)(problem, rng)
+
+    def spread(self, deadline: float | None, seed: int) -> None:
+        """Classic collisions: the generator prefers each robot's next cell on its SUO path
+        (:mod:`.scatter`), planned until ``deadline`` at the latest."""
+        problem = self.problem
+        goals = [int(w.goal_poses(c)[0]) for w, c in zip(problem.walks, problem.goals)]
+        self.generator.prefer = scatter(self.generator.nbrs, problem.dist_lists, list(problem.start), goals,
+                                        margin=SCATTER_MARGIN, deadline=deadline, seed=seed)
 
     def start(self) -> Poses:
         return tuple(self.problem.start)
@@ -146,20 +162,22 @@ class PoseSpace:
 
 
 def search(space, rng: random.Random, *, time_limit: float | None = None, improve: float = 0.0,
-           max_nodes: int = 2_000_000, stats: dict | None = None) -> tuple[str, list | None, dict]:
+           max_nodes: int = 2_000_000, stats: dict | None = None,
+           start: float | None = None) -> tuple[str, list | None, dict]:
     """LaCAM* over any search ``space`` (:class:`PoseSpace`, or whole states in
     :mod:`.lacam_states`): ``(status, joint actions or None, stats)`` with status ``optimal``
     (the improvement exhausted the space), ``feasible``, ``timeout``, ``unsolved`` (node cap or
     an unreachable goal; ``stats["failure"]``) or ``exhausted`` (no goal in the whole space:
     the caller says what that proves)."""
-    return _LaCAM(space, rng, time_limit, improve, max_nodes, stats or {}).run()
+    return _LaCAM(space, rng, time_limit, improve, max_nodes, stats or {}, start).run()
 
 
 class _LaCAM:
-    def __init__(self, space, rng: random.Random, time_limit, improve, max_nodes, stats: dict) -> None:
+    def __init__(self, space, rng: random.Random, time_limit, improve, max_nodes, stats: dict,
+                 start: float | None) -> None:
         self.space = space
         self.m = space.m
-        self.start = time.perf_counter()
+        self.start = time.perf_counter() if start is None else start
         self.deadline = None if time_limit is None else self.start + time_limit
         self.improve, self.max_nodes = improve, max_nodes
         self.rng = rng

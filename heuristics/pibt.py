@@ -145,6 +145,7 @@ class Classic(_Generator):
 
     def __init__(self, problem, rng: random.Random) -> None:
         super().__init__(problem, rng)
+        self.prefer: list[dict[int, int]] | None = None  # per robot: its SUO path's next cell (.scatter)
         walk = problem.walks[0]
         self.nbrs = [[q for q in row if q >= 0 and q != v] if standing else []
                      for v, (row, standing) in enumerate(zip(walk.succ.tolist(), walk.standing.tolist()))]
@@ -187,8 +188,10 @@ class Classic(_Generator):
         dist = self.problem.dist_lists[i]
         here, rand = self.here, self.rng.random
         moves = self.moves[i]
-        # by distance, then cells nobody stands on, then at random (one float keeps that order)
-        ranked = sorted((4 * dist[q] + (2 if q in here and here[q] != i else 0) + rand(), k)
+        # the next cell of its SUO path first; then by distance, then cells nobody stands on,
+        # then at random (one float keeps that order)
+        prefer = self.prefer[i].get(self.config[i], -1) if self.prefer else -1
+        ranked = sorted(((-1 if q == prefer else 4 * dist[q] + (2 if q in here and here[q] != i else 0)) + rand(), k)
                         for k, (_, q, _) in enumerate(moves))
         puller = self._swap_partner(i, moves[ranked[0][1]][1])
         if puller is not None:

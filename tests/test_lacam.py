@@ -215,3 +215,60 @@ def test_a_loop_out_of_its_share_of_the_time_hands_over_to_the_complete_search(m
     assert result.status == "feasible" and validate(inst, result.schedule).valid
     assert result.metrics.makespan >= brute_force(name).metrics.makespan
     assert result.stats["loop"]["status"] == "timeout"
+
+
+def _suo(inst, margin=10):
+    from random import Random as R
+
+    from bille.heuristics.joint import JointProblem
+    from bille.heuristics.pibt import Classic
+    from bille.heuristics.scatter import CollisionTable, scatter
+
+    problem = JointProblem.of(inst, "lacam")
+    nbrs = Classic(problem, R(0)).nbrs
+    goals = [int(w.goal_poses(c)[0]) for w, c in zip(problem.walks, problem.goals)]
+    nxt = scatter(nbrs, problem.dist_lists, list(problem.start), goals, margin=margin)
+    paths = []
+    for i, (s, g) in enumerate(zip(problem.start, goals)):
+        path = [s]
+        while path[-1] != g:
+            assert path[-1] in nxt[i] and nxt[i][path[-1]] in nbrs[path[-1]]
+            path.append(nxt[i][path[-1]])
+        assert len(path) - 1 <= problem.dist_lists[i][s] + margin
+        paths.append(path)
+    table = CollisionTable(len(nbrs))
+    for i, p in enumerate(paths):
+        table.enroll(i, p)
+    return problem, paths, table.count
+
+
+def test_suo_paths_walk_to_the_goal_within_the_margin_and_avoid_each_other():
+    # two robots cross a two-lane corridor head-on on the same lane: the shortest paths collide,
+    # the SUO paths take one lane each (one step longer for one of them)
+    inst = make("TTTTTTTT\nTTTTTTTT", [{"at": [0, 0]}, {"at": [7, 0]}], moveset="point",
+                robot_goals=[[7, 0], [0, 0]], collisions="classic")
+    assert _suo(inst, margin=0)[2] > 0  # the shortest paths: head-on on one lane
+    _, paths, collisions = _suo(inst, margin=2)
+    assert collisions == 0 and {p[len(p) // 2] // 8 for p in paths} == {0, 1}
+    alone = make("TTTT\nTTTT", [{"at": [0, 0]}], moveset="point", robot_goals=[[3, 1]], collisions="classic")
+    _, (path,), _ = _suo(alone)
+    assert len(path) - 1 == 4  # one robot: a shortest path
+
+
+def test_suo_makes_lacam_spread_robots_on_a_benchmark_map():
+    from bille.heuristics import lacam
+    from bille.instances.generators.movingai import from_movingai
+    from bille.tools.bench.mapf import shipped_maps, sum_of_costs
+
+    folder = shipped_maps()
+    inst = from_movingai(folder / "random-32-32-10.map", folder / "random-32-32-10-random-1.scen", agents=60)
+    _, _, collisions = _suo(inst)
+    with_suo = checked(inst, objective="sum-of-loss", improve=0.0)
+    assert "scatter_s" in with_suo.stats and collisions < 60
+    saved = lacam.SCATTER_SHARE
+    try:
+        lacam.SCATTER_SHARE = 0.0  # the SUO paths get no time: plain PIBT
+        plain = checked(inst, objective="sum-of-loss", improve=0.0, time_limit=30)
+    finally:
+        lacam.SCATTER_SHARE = saved
+    assert sum_of_costs(inst, with_suo.schedule) <= sum_of_costs(inst, plain.schedule)
