@@ -37,3 +37,30 @@ def test_bench_mapf_reads_another_folder_and_names_what_is_missing(capsys, tmp_p
     assert code == 0 and "mine" in out
     code, out, err = run(capsys, "bench", "mapf", "--maps", str(tmp_path), "--names", "nowhere", "--agents", "3")
     assert code == 2 and out == "" and "nowhere" in err and "Traceback" not in err
+
+
+def test_peer_schedules_are_checked_by_the_validator():
+    from bille.tools.bench.peers import checked, peers_table
+
+    inst = from_movingai(shipped_maps() / "room-32-32-4.map", shipped_maps() / f"room-32-32-4{SCENARIO}", agents=2)
+    result = solve(inst, "lacam", improve=0.0)
+    from bille.instances.schedule import bind
+
+    plan = [[tuple(r.front) for r in inst.robots]]
+    poses = list(inst.start_state.poses)
+    for t in range(result.schedule.length):  # bille's own schedule as a peer's cells per step
+        for i, row in enumerate(bind(inst, result.schedule)):
+            poses[i] = int(inst.world.graphs[i].succ[poses[i], row[t]])
+        plan.append([(int(inst.world.graphs[i].feet[p, 0]) % inst.width, int(inst.world.graphs[i].feet[p, 0]) // inst.width)
+                     for i, p in enumerate(poses)])
+    good = checked(inst, plan)
+    assert good == {"status": "feasible", "soc": sum_of_costs(inst, result.schedule)}
+    teleport = [plan[0], plan[-1]]  # every robot jumps to its goal in one step
+    assert checked(inst, teleport)["status"] == "invalid"
+    clash = [plan[0], [plan[0][0], plan[0][0]]]  # robot 1 jumps onto robot 0
+    assert checked(inst, clash)["status"] == "invalid"
+    assert checked(inst, [plan[0][::-1]] + plan[1:])["status"] == "other agents"
+    rows = [dict(map="room", agents=2, status="feasible", time_s=1.0, soc=good["soc"],
+                 peers={"lacam3": {"status": "feasible", "time_s": 0.5, "soc": good["soc"]}})]
+    lines = peers_table(rows, ["lacam3"])
+    assert "2.00x" in lines[2] and "1.000" in lines[2] and "bille 2, lacam3 2" in lines[-2]

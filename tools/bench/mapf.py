@@ -70,8 +70,13 @@ def lower_soc(instance: Instance) -> int:
     return total
 
 
-def mapf_rows(folder: Path, maps=MAPS, agents=AGENTS, time_limit: float = 60.0, improve: float = 0.0):
-    """Yield one result row per map and agent count, as soon as it is measured."""
+def mapf_rows(folder: Path, maps=MAPS, agents=AGENTS, time_limit: float = 60.0, improve: float = 0.0,
+              peers: dict | None = None):
+    """Yield one result row per map and agent count, as soon as it is measured; with ``peers``
+    (:func:`.peers.available`), each peer's row under ``row["peers"][name]``, run right after
+    bille's on the same agents (interleaved, so that a loaded machine weighs on both alike)."""
+    from .peers import run_lacam3, run_pypibt
+
     for name in maps:
         map_file, scen = folder / f"{name}.map", folder / f"{name}{SCENARIO}"
         for k in agents:
@@ -80,11 +85,17 @@ def mapf_rows(folder: Path, maps=MAPS, agents=AGENTS, time_limit: float = 60.0, 
             except InstanceError as exc:  # the scenario has fewer agents on this map
                 yield dict(map=name, agents=k, status="skipped", reason=str(exc))
                 continue
-            result = solve(inst, "lacam", time_limit=time_limit, improve=improve)
+            # sum of loss: lacam3's objective, whose improvements lower the sum of costs
+            result = solve(inst, "lacam", objective="sum-of-loss", time_limit=time_limit, improve=improve)
             row = dict(map=name, agents=k, status=result.status, time_s=result.time_s,
-                       first_s=result.stats.get("first_s"), lower=lower_soc(inst))
+                       first_s=result.stats.get("first_s"), lower=lower_soc(inst), peers={})
             if result.schedule is not None:
                 row.update(soc=sum_of_costs(inst, result.schedule), makespan=result.metrics.makespan)
+            if peers and "lacam3" in peers:
+                row["peers"]["lacam3"] = run_lacam3(peers["lacam3"], map_file, scen, k, inst,
+                                                    seconds=max(1, round(improve or time_limit)), anytime=improve > 0)
+            if peers and "pypibt" in peers:
+                row["peers"]["pypibt"] = run_pypibt(peers["pypibt"], map_file, scen, k, inst)
             yield row
 
 
