@@ -268,11 +268,16 @@ def bench_crowd(size: int, robots: int, horizon: int, seed: int) -> int:
 @click.option("--time-limit", type=click.FloatRange(min=0.1), default=60.0, show_default=True)
 @click.option("--improve", type=click.FloatRange(min=0), default=0.0, show_default=True,
               help="Seconds LaCAM* improves its first schedule.")
-def bench_mapf(folder: str | None, names: str | None, agents: str, time_limit: float, improve: float) -> int:
+@click.option("--peers", type=click.Path(file_okay=False, exists=True), default=None,
+              help="Folder with lacam3 (lacam3/build/main) and pypibt (pypibt/pypibt) built from their own "
+                   "repositories: print bille's time and sum of costs against theirs.")
+def bench_mapf(folder: str | None, names: str | None, agents: str, time_limit: float, improve: float,
+               peers: str | None) -> int:
     """Classic MAPF on MovingAI maps: LaCAM*'s success, sum of costs, makespan and time."""
     from pathlib import Path
 
     from .mapf import MAPS, map_names, mapf_rows, mapf_table, shipped_maps
+    from .peers import available, peers_table
 
     counts = _counts(agents, "--agents", "agent counts")
     where = shipped_maps() if folder is None else Path(folder)
@@ -282,11 +287,14 @@ def bench_mapf(folder: str | None, names: str | None, agents: str, time_limit: f
     if missing or not chosen:
         raise click.BadParameter(f"{', '.join(missing) or 'no map'}: expected NAME.map and NAME-random-1.scen in "
                                  f"{where} (found: {', '.join(found) or 'none'})", param_hint="--names")
+    found_peers = available(Path(peers)) if peers else {}
+    if peers and not found_peers:
+        raise click.BadParameter(f"{peers}: neither lacam3/build/main nor pypibt/pypibt/ in it", param_hint="--peers")
     rows = []
-    for row in mapf_rows(where, chosen, counts, time_limit, improve):
+    for row in mapf_rows(where, chosen, counts, time_limit, improve, found_peers):
         rows.append(row)
         click.echo(f"{row['map']} {row['agents']} agents: {row['status']} {row.get('reason', '')}".rstrip(), err=True)
-    for line in mapf_table(rows):
+    for line in mapf_table(rows) if not found_peers else peers_table(rows, sorted(found_peers)):
         click.echo(line)
     return EXIT_OK
 
