@@ -164,3 +164,42 @@ def test_max_runs_allows_more(tmp_path):
     spec = tmp_path / "s.yaml"
     spec.write_text("instances: [{gen: 'random --seed 0..3'}]\nmax_runs: 8\nmethods: {mstar: {}, astar: {}}\n")
     assert len(load_spec(spec).runs) == 8
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["gen", "graph", "--vertices", "1000000000"], "1000000000 vertices, more than the 500"),
+    (["gen", "hampath", "--vertices", "1000000000"], "1000000000 vertices, more than the 500"),
+    (["gen", "coop", "--vertices", "1000000000"], "1000000000 vertices, more than the 500"),
+    (["gen", "hampath", "--vertices", "3", "--scale", "1000000000"], "the reduction's construction: a 7x2000000021 grid"),
+    (["gen", "coop", "--vertices", "30", "--scale", "100000"], "the reduction's construction: a"),
+    (["gen", "coop", "--gap", "1000000000"], "the cooperative gadget: a 2000000017x3 grid needs about"),
+    (["gen", "corridor", "--room", "2", "--moved", "1", "--robots", "1"], "1 robot does not fit two 2x2 rooms"),
+])
+def test_generators_check_sizes_before_building(tmp_path, rejects, argv, message):
+    rejects(argv, message, tmp_path / "g.yaml")
+
+
+def test_a_large_graph_file_is_refused_before_it_is_searched(tmp_path, rejects):
+    graph = tmp_path / "g.txt"
+    graph.write_text(("o" * 45 + "\n") * 45)
+    rejects(["gen", "graph", graph], "2025 vertices, more than the 500")
+
+
+def test_the_hamiltonian_path_search_has_a_step_budget(tmp_path, rejects, monkeypatch):
+    from bille.instances.generators import graphs
+
+    monkeypatch.setattr(graphs, "MAX_STEPS", 5)
+    graph = tmp_path / "g.txt"
+    graph.write_text(("o" * 6 + "\n") * 6)
+    rejects(["gen", "graph", graph], "Hamiltonian path is undecided after 5 steps")
+
+
+@pytest.mark.parametrize("call, message", [
+    ("graph --vertices 1000000000", "unknown generator 'graph'"),
+    ("hampath --vertices 1000000000", "1000000000 vertices, more than the 500"),
+    ("coop --gap 1000000000", "the cooperative gadget: a 2000000017x3 grid"),
+])
+def test_generators_in_sweeps_check_sizes_first(tmp_path, rejects, monkeypatch, call, message):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "s.yaml").write_text(f"instances: [{{gen: '{call}'}}]\nmethods: {{mstar: {{}}}}\n")
+    rejects(["sweep", tmp_path / "s.yaml"], message)

@@ -35,6 +35,7 @@ import networkx as nx
 
 from ..errors import InstanceError
 from ..instance import Instance, Robot, check_instance
+from ..limits import check_size
 from ..moveset import load_moveset
 from .graphs import draw_graph, grid_graph, hamiltonian_path
 from .hampath import HALF, T_G, Layout, bound, check_graph, tiles_grid
@@ -55,6 +56,7 @@ class Gadget:
             raise InstanceError(f"the gap must be at least 2 (the entries' connectors then touch no task), got {gap}")
         self.gap = gap
         self.width = 2 * (SMALL[-1] + gap) + LARGE + 1
+        check_size([load_moveset("point")], left + self.width, top + 3, "the cooperative gadget")
         a = left + SMALL[-1] + gap
         self.entries = ((a, top + 1), (a + LARGE, top + 1))
         right = a + LARGE + gap                       # the right side's first small task

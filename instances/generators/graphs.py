@@ -28,6 +28,10 @@ import networkx as nx
 from ..errors import InstanceError
 
 XY = tuple[int, int]
+# the reductions and the exact Hamiltonian path search are for small graphs: a bound on the
+# vertices, and on the backtracking's steps, answers at once what would run for hours
+MAX_VERTICES = 500
+MAX_STEPS = 200_000
 _PAIR = re.compile(r"^\s*(-?\d+)\s+(-?\d+)\s*$")
 _EDGE = re.compile(r"^\s*(-?\d+)\s+(-?\d+)\s+(-?\d+)\s+(-?\d+)\s*$")
 
@@ -56,6 +60,8 @@ def parse_graph(text: str, name: str = "<graph>") -> nx.Graph:
     body = [(k, line) for k, line in lines if line.strip() and not line.lstrip().startswith("#")]
     if not body:
         raise InstanceError(f"{name}: no vertices (expected a drawing with 'o' or lines 'x y')")
+    if len(body) > MAX_VERTICES * 2:  # a vertex or edge per line: too many lines is too many vertices
+        _check_vertices(len(body) // 2, name)
     if all(_PAIR.match(line) for _, line in body):
         return grid_graph(tuple(map(int, _PAIR.match(line).groups())) for _, line in body)
     if all(_EDGE.match(line) for _, line in body):
@@ -68,6 +74,7 @@ def parse_graph(text: str, name: str = "<graph>") -> nx.Graph:
             g.add_edge((x1, y1), (x2, y2))
         check_grid_graph(g, name)
         return grid_graph(g.nodes)
+    _check_vertices(sum(line.count("o") for _, line in body), name)
     points = []
     top = body[0][0]
     for k, line in lines[top - 1:]:
@@ -90,6 +97,7 @@ def check_grid_graph(g, name: str = "the graph") -> None:
     are ``(x, y)`` integer points and whose edges join exactly the pairs at distance 1."""
     if not isinstance(g, nx.Graph):
         raise InstanceError(f"{name}: expected a networkx graph, got {type(g).__name__}")
+    _check_vertices(g.number_of_nodes(), name)
     for v in g.nodes:
         if not (isinstance(v, tuple) and len(v) == 2 and all(isinstance(c, int) and not isinstance(c, bool) for c in v)):
             raise InstanceError(f"{name}: vertex {v!r} is not an (x, y) integer point (a grid graph's vertices are "
@@ -121,6 +129,7 @@ def random_grid_graph(vertices: int, seed: int = 0) -> nx.Graph:
     free neighbour of the points so far, shifted so that the smallest ``x`` and ``y`` are 0."""
     if vertices < 1:
         raise InstanceError(f"a graph needs at least 1 vertex, got {vertices}")
+    _check_vertices(vertices)
     rnd = random.Random(seed)
     points = [(0, 0)]
     taken = {(0, 0)}
@@ -132,6 +141,12 @@ def random_grid_graph(vertices: int, seed: int = 0) -> nx.Graph:
             points.append((x + dx, y + dy))
     mx, my = min(x for x, _ in points), min(y for _, y in points)
     return grid_graph((x - mx, y - my) for x, y in points)
+
+
+def _check_vertices(n: int, name: str = "the graph") -> None:
+    if n > MAX_VERTICES:
+        raise InstanceError(f"{name}: {n} vertices, more than the {MAX_VERTICES} the reductions and the exact "
+                            "Hamiltonian path search are made for")
 
 
 def draw_graph(g: nx.Graph) -> str:
@@ -178,24 +193,30 @@ def hamiltonian_path(g: nx.Graph, start: XY | None = None, end: XY | None = None
     if len(leaves) > 2 or (start is not None and leaves and start not in leaves and len(leaves) == 2):
         return None
     firsts = [start] if start is not None else (leaves[:1] if leaves else sorted(g.nodes))
+    _check_vertices(n)
     adj = {v: set(g[v]) for v in g}
+    budget = [MAX_STEPS]
     for first in firsts:
         path = [first]
-        if _extend(adj, path, {first}, n):
+        if _extend(adj, path, {first}, n, budget):
             return path
     return None
 
 
-def _extend(adj: dict, path: list, seen: set, n: int) -> bool:
+def _extend(adj: dict, path: list, seen: set, n: int, budget: list) -> bool:
     if len(path) == n:
         return True
+    budget[0] -= 1
+    if budget[0] < 0:
+        raise InstanceError(f"the graph's Hamiltonian path is undecided after {MAX_STEPS} steps of the exact "
+                            f"search ({n} vertices: a smaller graph, please)")
     end = path[-1]
     options = [v for v in adj[end] if v not in seen]
     options.sort(key=lambda v: sum(1 for u in adj[v] if u not in seen))
     for v in options:
         path.append(v)
         seen.add(v)
-        if _promising(adj, seen, v, n) and _extend(adj, path, seen, n):
+        if _promising(adj, seen, v, n) and _extend(adj, path, seen, n, budget):
             return True
         path.pop()
         seen.discard(v)

@@ -147,6 +147,7 @@ class Layout:
         self.origin = (left + HALF - min(xs) * self.pitch, top + HALF - min(ys) * self.pitch)
         self.width = 2 * HALF + 1 + (max(xs) - min(xs)) * self.pitch
         self.height = 2 * HALF + 1 + (max(ys) - min(ys)) * self.pitch
+        check_size([load_moveset("point")], left + self.width, top + self.height, "the reduction's construction")
         self.base, self.tiles_only, self.goal_only = set(), set(), set()
         for v in g.nodes:
             cx, cy = self.centre(v)

@@ -142,7 +142,9 @@ def corridor(length: int, robots: int, *, room: int = 3, moved: int = 0, seed: i
     for i in range(robots):
         robot = _robot_in(sides[i % 2], used, ms.footprint, rnd, heading=1 if i % 2 == 0 else -1)
         if robot is None:
-            raise InstanceError(f"{robots} robots do not fit two {room}x{room} rooms (larger --room, fewer robots)")
+            who = "1 robot does" if robots == 1 else f"{robots} robots do"
+            kept = " with the moving tiles' column kept free" if moved else ""
+            raise InstanceError(f"{who} not fit two {room}x{room} rooms{kept} (larger --room, fewer robots)")
         placed.append(robot)
         used |= set(_feet(robot)) | _neighbours(robot.front)
     goals = None
@@ -214,7 +216,7 @@ def _place_robots(tiles: np.ndarray, width: int, height: int, count: int, footpr
         else:
             robot = _robot_in(cells, used, footprint, rnd)
         if robot is None:
-            raise InstanceError(f"{count} robots do not fit on {len(cells)} tiles")
+            raise InstanceError(f"{'1 robot does' if count == 1 else f'{count} robots do'} not fit on {len(cells)} tiles")
         placed.append(robot)
         taken = (set(_feet(robot)) | _neighbours(robot.front)) - used
         used |= taken
