@@ -67,7 +67,11 @@ def plan(instance: Instance, *, epsilon: float = 1.0, horizon: int = 5, time_lim
     max_steps = max(100, 4 * total) if max_steps is None else max_steps
     max_shifts = 4 * m * m if max_shifts is None else max_shifts
     dists = [d if c >= 0 else None for d, c in zip(problem.dist_lists, problem.goals)]
-    feet = [w.graph.feet.tolist() for w in problem.walks]
+    shared: dict[int, list] = {}  # one feet table per pose graph, read by every robot on it
+    for w in problem.walks:
+        if id(w.graph) not in shared:
+            shared[id(w.graph)] = w.graph.feet.tolist()
+    feet = [shared[id(w.graph)] for w in problem.walks]
 
     state = instance.start_state
     steps: list[tuple[int, ...]] = []

@@ -203,3 +203,36 @@ def test_generators_in_sweeps_check_sizes_first(tmp_path, rejects, monkeypatch, 
     monkeypatch.chdir(tmp_path)
     (tmp_path / "s.yaml").write_text(f"instances: [{{gen: '{call}'}}]\nmethods: {{mstar: {{}}}}\n")
     rejects(["sweep", tmp_path / "s.yaml"], message)
+
+
+def _point_crowd(width: int, height: int, every: int):
+    from bille.instances import instance_from_text
+
+    rows = "".join("  " + "T" * width + "\n" for _ in range(height))
+    cells = [(x, y) for y in range(height) for x in range(0, width, 2)][::every]
+    robots = "".join(f"  - {{at: [{x}, {y}]}}\n" for x, y in cells)
+    goals = ", ".join(f"[{x + 1}, {y}]" for x, y in cells)
+    return instance_from_text(f"name: crowd\nmoveset: point\ngrid: |\n{rows}robots:\n{robots}robot_goals: [{goals}]\n")
+
+
+def test_temporal_astar_per_robot_memory_stays_within_what_the_size_check_counts():
+    # 4,000 point robots on a 200x40 grid ran out of a 3 GB address space: every robot copied the
+    # pose graph's feet table. The memory one more robot costs must stay within the 40 bytes per
+    # pose that the distance-table check counts before it lets a problem in.
+    import tracemalloc
+
+    from bille.heuristics.joint import table_bytes
+    from bille.solvers import solve, validate
+
+    def peak(inst) -> int:
+        tracemalloc.start()
+        result = solve(inst, "temporal-astar")
+        size = tracemalloc.get_traced_memory()[1]
+        tracemalloc.stop()
+        assert result.status == "feasible" and validate(inst, result.schedule).valid
+        return size
+
+    few, many = _point_crowd(30, 12, 4), _point_crowd(30, 12, 1)
+    peak(many)  # caches warm
+    extra = peak(many) - peak(few)
+    assert extra <= 1.5 * (table_bytes(many) - table_bytes(few))
