@@ -1,16 +1,21 @@
 """Other tools' formats, both ways: MovingAI maps and scenarios (Sturtevant 2012) and the YAML of
 libMultiRobotPlanning (Hönig et al.): ``map: {dimensions, obstacles}``, ``agents: [{name, start,
-goal}]``, and schedules as ``schedule: {agent: [{x, y, t}, ...]}``.
+goal}]``, and schedules as ``statistics: {cost, makespan}`` and ``schedule: {agent: [{x, y, t},
+...]}``, each agent's path ending where it last moved, as that library writes them.
 
 Both formats describe point robots walking on a fixed grid, so only such instances fit: every
 robot ``point``, a goal cell for each, no tile that moves, none carried. Cells map as follows: a
 tile is a free cell, anything else blocked; read back, free cells are tiles and blocked cells
 obstacles (the largest 4-connected part of the free cells stays tiles, as in ``bille gen
 movingai``). Coordinates are ``(x, y)`` with ``y`` the row from the top, as in every format here.
+Agent names read from libMultiRobotPlanning are kept in the instance's ``meta.agents``; without
+them agent ``i`` is ``agent{i}``. Anything that is not exactly what a format holds is refused,
+naming the file, the line and the field: nothing is rounded or dropped.
 """
 from __future__ import annotations
 
-from collections import deque
+import heapq
+import math
 from pathlib import Path
 
 import numpy as np
@@ -18,11 +23,15 @@ import numpy as np
 from .errors import InstanceError, ScheduleError
 from .grid import Grid, detached_cells
 from .instance import Instance, Robot, check_instance
+from .limits import check_budget, check_size
 from .moveset import load_moveset
 from .rules import run
 from .schedule import Schedule, bind
+from .yamlsource import Source, expect_list, expect_mapping, expect_str, expect_xy
 
 MOVES = {(0, 0): "wait", (0, -1): "north", (1, 0): "east", (0, 1): "south", (-1, 0): "west"}
+# bytes per robot and step of a schedule while it is read and checked (names, ids, states)
+STEP_BYTES = 64
 
 
 def check_portable(inst: Instance, fmt: str) -> None:
@@ -38,6 +47,21 @@ def check_portable(inst: Instance, fmt: str) -> None:
         why = "a robot has no goal cell (every agent needs one)"
     if why:
         raise InstanceError(f"instance '{inst.name}' cannot be written as {fmt}: {why}")
+
+
+def agent_names(inst: Instance) -> list[str]:
+    """The agents' names: ``meta.agents`` when it names each robot once, else ``agent0 ..``."""
+    names = (inst.meta or {}).get("agents")
+    if isinstance(names, list) and len(names) == inst.num_robots and len(set(names)) == len(names) \
+            and all(isinstance(n, str) and n for n in names):
+        return list(names)
+    return [f"agent{i}" for i in range(inst.num_robots)]
+
+
+def check_steps(robots: int, steps: int, what: str, error=ScheduleError) -> None:
+    """Refuse, before anything is built, a schedule of ``steps`` steps that cannot fit."""
+    check_budget(robots * max(steps, 0) * STEP_BYTES,
+                 lambda size: f"{what}: {robots} robots x {steps} steps need about {size}", error)
 
 
 def _cells(inst: Instance):
@@ -57,30 +81,42 @@ def map_text(inst: Instance) -> str:
 
 
 def scen_text(inst: Instance, map_name: str) -> str:
-    """The robots as a MovingAI ``.scen`` (bucket 0; the last field is the shortest walk)."""
+    """The robots as a MovingAI ``.scen``, as the benchmark writes them: the optimal length is
+    the octile shortest path on the map (:func:`octile_distance`), the bucket its quarter."""
     check_portable(inst, "a MovingAI scenario")
     starts, goals = _cells(inst)
+    free = inst.start.tiles
     lines = ["version 1"]
     for s, g in zip(starts, goals):
-        length = _walk(inst, s, g)
-        lines.append("\t".join(map(str, (0, map_name, inst.width, inst.height, *s, *g, length))))
+        length = octile_distance(free, inst.width, inst.height, s, g)
+        lines.append("\t".join(map(str, (int(length // 4), map_name, inst.width, inst.height, *s, *g,
+                                         f"{length:.8f}"))))
     return "\n".join(lines) + "\n"
 
 
-def _walk(inst: Instance, s, g) -> int:
-    W, tiles = inst.width, inst.start.tiles
-    dist = {s: 0}
-    todo = deque([s])
+def octile_distance(free: np.ndarray, width: int, height: int, s, g) -> float:
+    """The shortest path from ``s`` to ``g`` over ``free`` cells with straight steps of 1 and
+    diagonal steps of sqrt(2), a diagonal only where both cells beside it are free (no corner
+    cutting, MovingAI's rule); ``inf`` if there is none."""
+    diag = math.sqrt(2)
+    best = {s: 0.0}
+    todo = [(0.0, s)]
+    ok = lambda x, y: 0 <= x < width and 0 <= y < height and free[y * width + x]  # noqa: E731
     while todo:
-        x, y = todo.popleft()
+        d, (x, y) = heapq.heappop(todo)
         if (x, y) == g:
-            return dist[(x, y)]
-        for dx, dy in ((1, 0), (-1, 0), (0, 1), (0, -1)):
-            n = (x + dx, y + dy)
-            if 0 <= n[0] < W and 0 <= n[1] < inst.height and tiles[n[1] * W + n[0]] and n not in dist:
-                dist[n] = dist[(x, y)] + 1
-                todo.append(n)
-    return -1
+            return d
+        if d > best[(x, y)]:
+            continue
+        for dx in (-1, 0, 1):
+            for dy in (-1, 0, 1):
+                n = (x + dx, y + dy)
+                if (dx or dy) and ok(*n) and (not (dx and dy) or (ok(x + dx, y) and ok(x, y + dy))):
+                    nd = d + (diag if dx and dy else 1.0)
+                    if nd < best.get(n, math.inf):
+                        best[n] = nd
+                        heapq.heappush(todo, (nd, n))
+    return math.inf
 
 
 # ---- libMultiRobotPlanning ----------------------------------------------------------------------
@@ -93,94 +129,152 @@ def to_mrp(inst: Instance) -> dict:
     blocked = np.flatnonzero(~inst.start.tiles).tolist()
     return {"map": {"dimensions": [inst.width, inst.height],
                     "obstacles": [[c % inst.width, c // inst.width] for c in blocked]},
-            "agents": [{"name": f"agent{i}", "start": list(s), "goal": list(g)}
-                       for i, (s, g) in enumerate(zip(starts, goals))]}
+            "agents": [{"name": n, "start": list(s), "goal": list(g)}
+                       for n, s, g in zip(agent_names(inst), starts, goals)]}
 
 
 def is_mrp(data) -> bool:
     return isinstance(data, dict) and "map" in data and "agents" in data
 
 
-def from_mrp(data: dict, name: str, where: str = "") -> Instance:
-    """An instance from libMultiRobotPlanning's YAML data (classic collisions, point robots)."""
-    def fail(msg):
-        raise InstanceError(f"{where}: {msg}" if where else msg)
+def _int(value, src: Source, path, what: str = "a whole number") -> int:
+    if not isinstance(value, int) or isinstance(value, bool):
+        raise src.fail(path, f"expected {what}, got {value!r}"[:200])
+    return value
 
-    try:
-        width, height = (int(v) for v in data["map"]["dimensions"])
-        obstacles = [tuple(int(v) for v in xy) for xy in data["map"].get("obstacles") or []]
-        agents = [(tuple(int(v) for v in a["start"]), tuple(int(v) for v in a["goal"])) for a in data["agents"]]
-    except (KeyError, TypeError, ValueError):
-        fail("expected map: {dimensions: [W, H], obstacles: [[x, y], ...]} and agents: [{name, start: [x, y], "
-             "goal: [x, y]}, ...]")
-    if width < 1 or height < 1 or not agents:
-        fail("the map needs positive dimensions and at least one agent")
+
+def from_mrp(data: dict, name: str, src: Source | str | None = None) -> Instance:
+    """An instance from libMultiRobotPlanning's YAML data (classic collisions, point robots);
+    ``src`` locates errors (a :class:`Source`, or a file name)."""
+    if not isinstance(src, Source):
+        src = Source(src or None, InstanceError)
+    top = expect_mapping(data, src, (), required=("map", "agents"))
+    mp = expect_mapping(top["map"], src, ("map",), required=("dimensions",), optional=("obstacles",))
+    width, height = expect_xy(mp["dimensions"], src, ("map", "dimensions"))
+    if width < 1 or height < 1:
+        raise src.fail(("map", "dimensions"), f"expected positive [width, height], got [{width}, {height}]")
+    check_size([load_moveset("point")], width, height, src.at(("map", "dimensions")).rstrip(": ") or name)
     free = np.ones(width * height, dtype=bool)
-    for x, y in obstacles:
+    obstacles = expect_list(mp.get("obstacles") or [], src, ("map", "obstacles"), "a list of [x, y]")
+    for k, xy in enumerate(obstacles):
+        x, y = expect_xy(xy, src, ("map", "obstacles", k))
         if not (0 <= x < width and 0 <= y < height):
-            fail(f"obstacle ({x}, {y}) is outside the {width}x{height} map")
+            raise src.fail(("map", "obstacles", k), f"({x}, {y}) is outside the {width}x{height} map")
+        if not free[y * width + x]:
+            raise src.fail(("map", "obstacles", k), f"({x}, {y}) is listed twice")
         free[y * width + x] = False
     tiles = free.copy()
     tiles[detached_cells(free, width, height)] = False
-    for k, (s, g) in enumerate(agents):
-        for what, (x, y) in (("start", s), ("goal", g)):
+    agents = expect_list(top["agents"], src, ("agents",), "a list of agents")
+    if not agents:
+        raise src.fail(("agents",), "expected at least one agent")
+    names, cells = [], []
+    for k, agent in enumerate(agents):
+        a = expect_mapping(agent, src, ("agents", k), required=("name", "start", "goal"))
+        nm = expect_str(a["name"], src, ("agents", k, "name"), "the agent's name")
+        if nm in names:
+            raise src.fail(("agents", k, "name"), f"agent name {nm!r} is given twice")
+        names.append(nm)
+        pair = []
+        for what in ("start", "goal"):
+            x, y = expect_xy(a[what], src, ("agents", k, what))
             if not (0 <= x < width and 0 <= y < height and tiles[y * width + x]):
-                fail(f"agent {k}'s {what} ({x}, {y}) is not a free cell of the map's largest connected part")
+                raise src.fail(("agents", k, what), f"({x}, {y}) is not a free cell of the map's largest connected "
+                                                   "part")
+            pair.append((x, y))
+        cells.append(pair)
     grid = Grid.from_masks(width, height, ~free, tiles)
-    inst = Instance(name, load_moveset("point"), grid, tuple(Robot(s) for s, _ in agents),
-                    robot_goals=tuple(g for _, g in agents), collisions="classic", meta={"source": "libMultiRobotPlanning"})
+    meta = {"source": "libMultiRobotPlanning"}
+    if names != [f"agent{i}" for i in range(len(names))]:
+        meta["agents"] = names
+    inst = Instance(name, load_moveset("point"), grid, tuple(Robot(s) for s, _ in cells),
+                    robot_goals=tuple(g for _, g in cells), collisions="classic", meta=meta)
     return check_instance(inst)
 
 
-def schedule_to_mrp(inst: Instance, schedule: Schedule) -> dict:
-    """A schedule as libMultiRobotPlanning's ``schedule`` (every robot's cell at every time)."""
-    check_portable(inst, "a libMultiRobotPlanning schedule")
+def _paths(inst: Instance, schedule: Schedule) -> list[list[tuple[int, int]]]:
     ids = bind(inst, schedule)
     states = [inst.start_state]
     for st in run(inst.world, inst.start_state, ids):
         if not hasattr(st, "poses"):
             raise ScheduleError(f"the schedule breaks a rule: {st}")
         states.append(st)
-    cells = [[inst.world.xy(inst.world.graphs[i].feet[st.poses[i]][0]) for st in states]
-             for i in range(inst.num_robots)]
-    makespan = len(states) - 1
-    cost = sum(next((t for t in range(makespan, -1, -1) if path[t] != path[-1]), -1) + 1 for path in cells)
-    return {"statistics": {"cost": cost, "makespan": makespan},
-            "schedule": {f"agent{i}": [{"x": x, "y": y, "t": t} for t, (x, y) in enumerate(path)]
-                         for i, path in enumerate(cells)}}
+    return [[inst.world.xy(inst.world.graphs[i].feet[st.poses[i]][0]) for st in states]
+            for i in range(inst.num_robots)]
 
 
-def schedule_from_mrp(inst: Instance, data: dict, where: str = "") -> Schedule:
-    """A schedule from libMultiRobotPlanning's ``schedule`` of agents ``agent0 .. agentN``
-    (or in the order given): unit moves between consecutive times, waits where a time is skipped
-    and after an agent's last entry."""
-    def fail(msg):
-        raise ScheduleError(f"{where}: {msg}" if where else msg)
-
+def schedule_to_mrp(inst: Instance, schedule: Schedule) -> dict:
+    """A schedule as libMultiRobotPlanning writes one: each agent's cell at every time up to its
+    last move (it stays there), and the statistics ``cost`` (the sum of those times) and
+    ``makespan`` (their largest); ``runtime`` and ``highLevelExpanded`` where the schedule's
+    metadata has the planner's ``time_s`` and ``expansions``."""
     check_portable(inst, "a libMultiRobotPlanning schedule")
-    plans = data.get("schedule") if isinstance(data, dict) else None
-    if not isinstance(plans, dict) or len(plans) != inst.num_robots:
-        fail(f"expected schedule: with one entry per agent ({inst.num_robots})")
     paths = []
-    for name, entries in plans.items():
-        try:
-            timed = sorted((int(e["t"]), (int(e["x"]), int(e["y"]))) for e in entries)
-        except (KeyError, TypeError, ValueError):
-            fail(f"agent {name}: expected a list of {{x, y, t}}")
+    for path in _paths(inst, schedule):
+        last = next((t for t in range(len(path) - 1, 0, -1) if path[t] != path[t - 1]), 0)
+        paths.append(path[: last + 1])
+    stats = {"cost": sum(len(p) - 1 for p in paths), "makespan": max((len(p) - 1 for p in paths), default=0)}
+    meta = schedule.meta or {}
+    for ours, theirs in (("time_s", "runtime"), ("expansions", "highLevelExpanded")):
+        if isinstance(meta.get(ours), (int, float)) and not isinstance(meta[ours], bool):
+            stats[theirs] = meta[ours]
+    return {"statistics": stats,
+            "schedule": {n: [{"x": x, "y": y, "t": t} for t, (x, y) in enumerate(path)]
+                         for n, path in zip(agent_names(inst), paths)}}
+
+
+def schedule_from_mrp(inst: Instance, data: dict, src: Source | str | None = None) -> Schedule:
+    """A schedule from libMultiRobotPlanning's ``schedule``: one entry per agent of the instance
+    (by name), each a list of ``{x, y, t}`` with ``t`` from 0 (the agent's start) strictly
+    increasing; unit moves between consecutive entries, waits where a time is skipped and after
+    an agent's last entry."""
+    if not isinstance(src, Source):
+        src = Source(src or None, ScheduleError)
+    check_portable(inst, "a libMultiRobotPlanning schedule")
+    top = expect_mapping(data, src, (), required=("schedule",), optional=("statistics",))
+    plans = top["schedule"]
+    if not isinstance(plans, dict):
+        raise src.fail(("schedule",), "expected a mapping of agent names to paths")
+    names = agent_names(inst)
+    for key in plans:
+        if key not in names:
+            raise src.fail(("schedule", key), f"agent {key!r} is not an agent of instance '{inst.name}' (its agents: "
+                                              f"{', '.join(names[:5])}{' ...' if len(names) > 5 else ''})")
+    missing = [n for n in names if n not in plans]
+    if missing:
+        raise src.fail(("schedule",), f"no path for agent {missing[0]!r}")
+    starts, _ = _cells(inst)
+    paths = []
+    for i, name in enumerate(names):
+        entries = expect_list(plans[name], src, ("schedule", name), "a list of {x, y, t}")
+        if not entries:
+            raise src.fail(("schedule", name), "an empty path (it starts with {x, y, t: 0} at the agent's start)")
+        timed = []
+        for k, e in enumerate(entries):
+            where = ("schedule", name, k)
+            e = expect_mapping(e, src, where, required=("x", "y", "t"))
+            x, y, t = (_int(e[c], src, where + (c,)) for c in ("x", "y", "t"))
+            if timed and t <= timed[-1][0]:
+                raise src.fail(where + ("t",), f"time {t} does not come after time {timed[-1][0]}")
+            if not timed and (t != 0 or (x, y) != tuple(starts[i])):
+                raise src.fail(where, f"the path starts at ({x}, {y}) at time {t}; agent {name!r} starts at "
+                                      f"{tuple(starts[i])} at time 0")
+            timed.append((t, (x, y)))
         paths.append((name, timed))
     makespan = max(timed[-1][0] for _, timed in paths)
+    check_steps(inst.num_robots, makespan, src.at(("schedule",)).rstrip(": ") or "the schedule")
     rows = []
     for name, timed in paths:
-        at = dict(timed)
         cell, row = timed[0][1], []
-        for t in range(1, makespan + 1):
-            nxt = at.get(t, cell)
+        for k in range(1, len(timed)):
+            (t0, _), (t1, nxt) = timed[k - 1], timed[k]
             move = MOVES.get((nxt[0] - cell[0], nxt[1] - cell[1]))
             if move is None:
-                fail(f"agent {name}: from {cell} to {nxt} at time {t} is not one step")
-            row.append(move)
+                raise src.fail(("schedule", name, k), f"from {cell} at time {t1 - 1} to {nxt} at time {t1} is not "
+                                                      "one step")
+            row += ["wait"] * (t1 - t0 - 1) + [move]
             cell = nxt
-        rows.append(tuple(row))
+        rows.append(tuple(row + ["wait"] * (makespan - len(row))))
     return Schedule(tuple(rows), meta={"source": "libMultiRobotPlanning"})
 
 

@@ -25,7 +25,8 @@ def _yaml(data) -> str:
 @click.argument("source")
 @click.argument("target")
 @click.option("--instance", "instance_path", metavar="INSTANCE",
-              help="For a schedule: the instance it belongs to (a file or a bundled name).")
+              help="For a schedule: the instance it belongs to (a bundled name, or a file in any format "
+                   "convert reads: .yaml, .mrp.yaml, .scen with its .map).")
 @click.option("--agents", type=click.IntRange(min=1), help="From a .scen: its first N usable rows (default: all).")
 @click.option("--map", "map_path", type=click.Path(dir_okay=False),
               help="From a .scen: the .map file (default: the one the scenario names, in its folder).")
@@ -40,57 +41,59 @@ def convert(source: str, target: str, instance_path: str | None, agents: int | N
     if kind == "instance":
         _write_instance(value, target)
     else:
-        inst = instance_arg(instance_path)
-        text = _yaml(schedule_to_mrp(inst, value)) if mrp_name(target) else dump_schedule(value)
         if not mrp_name(target) and not target.endswith((".yaml", ".yml")):
             raise ScheduleError(f"{target}: a schedule is written as .yaml (bille) or .mrp.yaml (libMultiRobotPlanning)")
+        inst = _instance(instance_path)
+        text = _yaml(schedule_to_mrp(inst, value)) if mrp_name(target) else dump_schedule(value)
         write_atomic(target, text, ScheduleError)
     click.echo(f"{source} -> {target}")
     return EXIT_OK
 
 
-def _read(source: str, instance_path, agents, map_path):
+def _instance(path: str, agents: int | None = None, map_path: str | None = None):
+    """An instance from a file in any format convert reads, or a bundled name."""
+    kind, inst = _read(path, None, agents, map_path, schedules=False)
+    return inst
+
+
+def _read(source: str, instance_path, agents, map_path, schedules: bool = True):
     path = Path(source)
     if path.suffix == ".scen":
-        from bille.instances.generators.movingai import from_movingai
+        from bille.instances.generators.movingai import from_movingai, scen_map
 
-        mp = Path(map_path) if map_path else _map_of(path)
+        mp = Path(map_path) if map_path else scen_map(path)
         return "instance", from_movingai(mp, path, agents=agents, name=path.stem)
     if path.suffix == ".map":
         raise InstanceError(f"{source}: a .map holds no agents; convert its .scen (with --map if needed)")
     if not path.is_file():
         return "instance", instance_arg(source)  # a bundled name
-    data, _ = load_yaml_file(path, InstanceError)
+    data, src = load_yaml_file(path, InstanceError)
     if is_mrp(data):
-        return "instance", from_mrp(data, path.name.split(".")[0], str(path))
-    if isinstance(data, dict) and isinstance(data.get("schedule"), dict):
-        if instance_path is None:
-            raise ScheduleError(f"{source}: a libMultiRobotPlanning schedule needs --instance")
-        return "schedule", schedule_from_mrp(instance_arg(instance_path), data, str(path))
+        return "instance", from_mrp(data, path.name.split(".")[0], src)
     if isinstance(data, dict) and "grid" in data:
         return "instance", load_instance(path)
+    if not schedules:
+        raise InstanceError(f"{source}: not an instance (expected bille YAML with a grid, libMultiRobotPlanning "
+                            "YAML with map and agents, or a MovingAI .scen)")
     if instance_path is None:
-        raise ScheduleError(f"{source}: neither an instance nor a schedule with --instance")
+        raise ScheduleError(f"{source}: " + ("a libMultiRobotPlanning schedule needs --instance"
+                                             if isinstance(data, dict) and "schedule" in data
+                                             else "neither an instance nor a schedule with --instance"))
+    inst = _instance(instance_path)
+    if isinstance(data, dict) and "schedule" in data:
+        src.error = ScheduleError
+        return "schedule", schedule_from_mrp(inst, data, src)
     return "schedule", load_schedule(path)
-
-
-def _map_of(scen: Path) -> Path:
-    first = next((line for line in scen.read_text(encoding="utf-8").splitlines()[1:] if line.strip()), None)
-    if first is None:
-        raise InstanceError(f"{scen}: no rows")
-    fields = first.split("\t") if "\t" in first else first.split()
-    if len(fields) < 2:
-        raise InstanceError(f"{scen}:2: expected the map's name in the second field")
-    return scen.parent / Path(fields[1]).name
 
 
 def _write_instance(inst, target: str) -> None:
     path = Path(target)
-    if path.suffix == ".scen":
+    if path.suffix == ".scen":  # both texts first: nothing is written if either cannot be
         map_file = path.with_suffix(".map")
         writable(map_file)
-        write_atomic(map_file, map_text(inst), InstanceError)
-        write_atomic(path, scen_text(inst, map_file.name), InstanceError)
+        texts = {map_file: map_text(inst), path: scen_text(inst, map_file.name)}
+        for file, text in texts.items():
+            write_atomic(file, text, InstanceError)
         click.echo(f"map written to {map_file}")
     elif path.suffix == ".map":
         write_atomic(path, map_text(inst), InstanceError)

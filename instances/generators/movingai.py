@@ -11,6 +11,7 @@ without one, are drawn at random with the seed.
 """
 from __future__ import annotations
 
+import math
 import random
 from pathlib import Path
 
@@ -59,8 +60,10 @@ def read_map(path: str | Path) -> tuple[int, int, np.ndarray]:
     return width, height, passable
 
 
-def read_scen(path: str | Path) -> list[tuple[tuple[int, int], tuple[int, int]]]:
-    """The ``(start, goal)`` cells of a ``.scen`` file's rows, in order."""
+def read_scen(path: str | Path, size: tuple[int, int] | None = None) -> list[tuple[tuple[int, int], tuple[int, int]]]:
+    """The ``(start, goal)`` cells of a ``.scen`` file's rows, in order. Every row has the nine
+    fields of the format (bucket, map, width, height, start x, start y, goal x, goal y, optimal
+    length); with ``size``, its width and height must be the map's."""
     out = []
     for k, line in enumerate(_lines(path), start=1):
         parts = line.split("\t") if "\t" in line else line.split()
@@ -68,15 +71,38 @@ def read_scen(path: str | Path) -> list[tuple[tuple[int, int], tuple[int, int]]]
             continue
         if not line.strip():
             continue
-        if len(parts) < 8:
+        if len(parts) != 9:
             raise InstanceError(f"{path}:{k}: expected 9 fields (bucket, map, width, height, start x, start y, "
                                 f"goal x, goal y, length), got {len(parts)}")
         try:
-            sx, sy, gx, gy = (int(v) for v in parts[4:8])
+            bucket, width, height, sx, sy, gx, gy = (int(v) for v in (parts[0], *parts[2:8]))
         except ValueError:
-            raise InstanceError(f"{path}:{k}: start and goal coordinates must be integers") from None
+            raise InstanceError(f"{path}:{k}: the bucket, width, height and coordinates must be whole numbers") from None
+        try:
+            length = float(parts[8])
+        except ValueError:
+            length = math.nan
+        if not (bucket >= 0 and 0 <= length < math.inf):
+            raise InstanceError(f"{path}:{k}: expected a bucket of at least 0 and a finite length of at least 0, "
+                                f"got {parts[0]!r} and {parts[8]!r}")
+        if size is not None and (width, height) != size:
+            raise InstanceError(f"{path}:{k}: the row says the map is {width}x{height}, the map is {size[0]}x{size[1]}")
         out.append(((sx, sy), (gx, gy)))
     return out
+
+
+def scen_map(scen: str | Path) -> Path:
+    """The ``.map`` file a scenario names in its first row, in the scenario's folder."""
+    scen = Path(scen)
+    lines = _lines(scen)
+    first = next(((k, line) for k, line in enumerate(lines[1:], 2) if line.strip()), None)
+    if first is None:
+        raise InstanceError(f"{scen}: no rows")
+    k, line = first
+    fields = line.split("\t") if "\t" in line else line.split()
+    if len(fields) < 2 or not fields[1].strip():
+        raise InstanceError(f"{scen}:{k}: expected the map's name in the second field")
+    return scen.parent / Path(fields[1]).name
 
 
 def from_movingai(map_path: str | Path, scen_path: str | Path | None = None, *, agents: int | None,
@@ -98,7 +124,7 @@ def from_movingai(map_path: str | Path, scen_path: str | Path | None = None, *, 
     if scen_path is not None:
         starts: set = set()
         goals: set = set()
-        for s, g in read_scen(scen_path):  # as the benchmark means it: starts apart, goals apart
+        for s, g in read_scen(scen_path, (width, height)):  # as the benchmark means it: starts apart, goals apart
             if inside(s) and inside(g) and s not in starts and g not in goals and (agents is None or len(pairs) < agents):
                 pairs.append((s, g))
                 starts.add(s)
