@@ -177,9 +177,11 @@ def test_png_rows_are_schedules_and_gif_has_every_frame(tmp_path):
     sched = load_schedule(bundled_path("reconfig-30.schedule"))
     traces = [trace(inst, sched, "a"), trace(inst, None, "b")]
     layout = save_png(traces, tmp_path / "two.png", frames="all", cell=8)
-    fit = (MAX_ROW_PX - GAP_PX) // (inst.width * 8 + GAP_PX)  # frames wrap into rows of this many
+    assert layout.cols == sched.length + 1 and layout.rows == 2  # one row per schedule; b: its start only
+    layout = save_png(traces[:1], tmp_path / "one.png", frames="all", cell=8)
+    fit = (MAX_ROW_PX - GAP_PX) // (inst.width * 8 + GAP_PX)  # one schedule's frames wrap into rows
     cols = min(fit, sched.length + 1)
-    assert layout.cols == cols and layout.rows == math.ceil((sched.length + 1) / cols) + 1  # b: its start only
+    assert layout.cols == cols and layout.rows == math.ceil((sched.length + 1) / cols)
     assert layout.size_px[0] <= MAX_ROW_PX
     gif = tmp_path / "r.gif"
     layout = save_gif(traces, gif, fps=10, cell=8)

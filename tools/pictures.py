@@ -5,9 +5,10 @@ panels, each one frame of one schedule; every panel has ``cell`` pixels per grid
 band above it and a gap around it, and the legend runs along the bottom, so that the pixel of
 every cell is known (:meth:`Layout.cell_center`): tests read colors there.
 
-- PNG: each schedule its frames (chosen per schedule: ``auto`` gives a shorter schedule its own
-  start, end and steps between), in rows of at most :data:`MAX_ROW_PX` pixels, one schedule
-  after the other.
+- Picture (``--png``, in the format its suffix names): each schedule its frames (chosen per
+  schedule: ``auto`` gives a shorter schedule its own start, end and steps between). Several
+  schedules: one row each, side by side in time. One schedule: its frames in rows of at most
+  :data:`MAX_ROW_PX` pixels.
 - GIF: one row with one panel per schedule, side by side, all frames in time.
 
 Every panel has its coordinates along its left and bottom edges, each robot's path so far, and
@@ -112,7 +113,7 @@ class Painter:
         per_row = max(1, probe.size_px[0] // LEGEND_ITEM_PX)
         self.layout = Layout(rows, cols, inst.width, inst.height, cell, math.ceil(len(self.legend) / per_row))
         w, h = self.layout.size_px
-        if w * h > 60_000_000:
+        if w * h > 60_000_000 or max(w, h) >= 1 << 16:
             raise OptionError(f"the picture would be {w}x{h} pixels: choose fewer frames or a smaller --cell")
         self.fig = plt.figure(figsize=(w / DPI, h / DPI), dpi=DPI, facecolor="white")
         self.axes = [[self._axes(r, c) for c in range(cols)] for r in range(rows)]
@@ -308,13 +309,30 @@ def _cell_pt(ax, width: int) -> float:
 
 # ---- files ------------------------------------------------------------------------------------
 
+FORMATS = ("png", "jpg", "jpeg", "pdf", "svg", "svgz", "eps", "ps", "tif", "tiff", "webp")
+
+
+def image_format(path: str | Path) -> str:
+    """The format a picture's file name asks for (``png`` without a suffix); raises
+    :class:`OptionError` for a suffix matplotlib cannot write."""
+    suffix = Path(path).suffix.lower().lstrip(".")
+    if not suffix:
+        return "png"
+    if suffix not in FORMATS:
+        raise OptionError(f"--png: {path}: cannot write a '.{suffix}' picture (expected one of: "
+                          f"{', '.join('.' + f for f in FORMATS)})")
+    return suffix
+
+
 def save_png(traces: Sequence[Trace], path: str | Path, frames: str | None = None, cell: int = 32) -> Layout:
     """Each schedule's chosen frames (:func:`choose_frames` on its own length; frame numbers
-    beyond a shorter schedule's end show its end, once), wrapped into rows of at most
-    :data:`MAX_ROW_PX` pixels, one schedule after the other. Written atomically."""
+    beyond a shorter schedule's end show its end, once): one row per schedule when there are
+    several; a single schedule's wrapped into rows of at most :data:`MAX_ROW_PX` pixels. Written
+    atomically, in the format the file name's suffix names (:func:`image_format`)."""
+    fmt = image_format(path)
     inst = traces[0].instance
     per_trace = [_frames_of(frames, tr.steps) for tr in traces]
-    fit = max(1, (MAX_ROW_PX - GAP_PX) // (inst.width * cell + GAP_PX))
+    fit = max(1, (MAX_ROW_PX - GAP_PX) // (inst.width * cell + GAP_PX)) if len(traces) == 1 else math.inf
     cols = min(fit, max(len(f) for f in per_trace))
     panels, row = [], 0
     for tr, chosen in zip(traces, per_trace):
@@ -328,7 +346,7 @@ def save_png(traces: Sequence[Trace], path: str | Path, frames: str | None = Non
             for c, ax in enumerate(line):
                 ax.set_visible((r, c) in used)
         painter.draw(panels)
-        write_with(path, lambda tmp: painter.fig.savefig(tmp, dpi=DPI, format="png"), BilleError)
+        write_with(path, lambda tmp: painter.fig.savefig(tmp, dpi=DPI, format=fmt), BilleError)
         return painter.layout
     finally:
         painter.close()

@@ -1,6 +1,8 @@
 """The ``view`` command: rerun recordings, pictures and animations of schedules."""
 from __future__ import annotations
 
+from pathlib import Path
+
 import click
 
 from .common import (EXIT_NO, EXIT_OK, instance_arg, label_of, record_traces, schedule_arg, stderr_console, trace_of,
@@ -14,7 +16,8 @@ from .common import (EXIT_NO, EXIT_OK, instance_arg, label_of, record_traces, sc
               help="Write a rerun recording (schedules side by side; open it with 'rerun OUT.rrd').")
 @click.option("--spawn", is_flag=True, help="Also open the rerun viewer, where a display exists.")
 @click.option("--png", type=click.Path(dir_okay=False), metavar="OUT.png",
-              help="Write a picture: one row per schedule, the chosen frames side by side.")
+              help="Write a picture (.png, .jpg, .pdf, .svg, ...: the format the suffix names): one row per "
+                   "schedule, the chosen frames side by side (one schedule alone wraps into rows).")
 @click.option("--gif", type=click.Path(dir_okay=False), metavar="OUT.gif",
               help="Write an animation of the whole schedule(s).")
 @click.option("--frames", default="auto", show_default=True,
@@ -33,10 +36,13 @@ def view(instance: str, schedules, rrd, spawn: bool, png, gif, frames: str, fps:
     inst = instance_arg(instance)
     names = list(labels) or unique([label_of(arg) for arg in schedules])
     traces = [trace_of(inst, schedule_arg(arg), name) for arg, name in zip(schedules, names)] or [trace_of(inst, None, inst.name)]
+    if gif and Path(gif).suffix.lower() not in ("", ".gif"):
+        raise click.BadParameter(f"{gif}: an animation is written as .gif", param_hint="--gif")
     if png:
-        from .pictures import choose_frames
+        from .pictures import choose_frames, image_format
 
-        choose_frames(frames, max(t.steps for t in traces))  # a bad --frames fails before any file is written
+        image_format(png)  # a bad suffix or --frames fails before any file is written
+        choose_frames(frames, max(t.steps for t in traces))
     if rrd or spawn:
         record_traces(traces, rrd, spawn=spawn)
     if png:
