@@ -35,12 +35,14 @@ from bille.instances import Instance, OptionError
 
 from .joint import NO_WALK, JointProblem, to_result
 from .pibt import Bille, Classic, next_priorities
+from .refine import Paths, refine_once
 from .scatter import scatter
 
 OBJECTIVES = ("makespan", "sum-of-loss")
 RESTART = 0.001  # chance per iteration, while improving, to go back to the start configuration
 SCATTER_MARGIN = 10  # steps an SUO path may take beyond the shortest (lacam3's default)
 SCATTER_SHARE = 0.5  # of the time limit, at most, for the SUO paths (lacam3's share)
+REFINE_RATIO = 3  # while improving: time refining per time searching (lacam3 refines in 4 threads)
 Poses = tuple[int, ...]
 
 
@@ -119,15 +121,40 @@ class PoseSpace:
         self.m = len(problem.walks)
         self.makespan = objective == "makespan"
         self.classic = problem.instance.collisions == "classic"
+        self.refining = False  # no refinement (:meth:`refine`) until the SUO paths are set
         self.generator = (Classic if self.classic else Bille)(problem, rng)
 
     def spread(self, deadline: float | None, seed: int) -> None:
         """Classic collisions: the generator prefers each robot's next cell on its SUO path
-        (:mod:`.scatter`), planned until ``deadline`` at the latest."""
+        (:mod:`.scatter`), planned until ``deadline`` at the latest; and the search may
+        refine its schedules (:meth:`refine`)."""
         problem = self.problem
-        goals = [int(w.goal_poses(c)[0]) for w, c in zip(problem.walks, problem.goals)]
-        self.generator.prefer = scatter(self.generator.nbrs, problem.dist_lists, list(problem.start), goals,
-                                        margin=SCATTER_MARGIN, deadline=deadline, seed=seed)
+        self.goal_poses = [int(w.goal_poses(c)[0]) for w, c in zip(problem.walks, problem.goals)]
+        self.generator.prefer = scatter(self.generator.nbrs, problem.dist_lists, list(problem.start),
+                                        self.goal_poses, margin=SCATTER_MARGIN, deadline=deadline, seed=seed)
+        self.refining = None
+
+    def refine(self, configs: list[Poses] | None, rng: random.Random, deadline: float | None) -> list[Poses] | None:
+        """One neighbourhood of :mod:`.refine` on the best schedule (``configs``, given when it
+        changed since the last call): the improved configurations, or None."""
+        goals = self.goal_poses
+        if configs is not None:
+            paths = []
+            for i, goal in enumerate(goals):
+                end = len(configs) - 1
+                while end > 0 and configs[end - 1][i] == goal:
+                    end -= 1
+                paths.append([c[i] for c in configs[:end + 1]])
+            self.refining = Paths(paths, len(self.generator.nbrs))
+        if not refine_once(self.refining, self.generator.nbrs, self.problem.dist_lists, goals, rng, deadline):
+            return None
+        paths = self.refining.paths
+        return [tuple(p[min(t, len(p) - 1)] for p in paths) for t in range(max(map(len, paths)))]
+
+    def actions(self, a: Poses, b: Poses) -> tuple[int, ...]:
+        """The joint action from configuration ``a`` to ``b``."""
+        moves = self.problem.moves
+        return tuple(next(act for act, q, _ in moves(i, p) if q == r) for i, (p, r) in enumerate(zip(a, b)))
 
     def start(self) -> Poses:
         return tuple(self.problem.start)
@@ -157,8 +184,7 @@ class PoseSpace:
     def cost(self, a: Poses, b: Poses) -> int:
         if self.makespan:
             return 1
-        at = self.problem.at_goal
-        return sum(1 for i, (p, q) in enumerate(zip(a, b)) if not (p == q and at(i, q)))
+        return sum(1 for home, p, q in zip(self.problem.home_lists, a, b) if not (p == q and home[q]))
 
 
 def search(space, rng: random.Random, *, time_limit: float | None = None, improve: float = 0.0,
@@ -205,6 +231,8 @@ class _LaCAM:
             return "unsolved", None, self.stats
         root = self.node(space.start(), None, None, 0)
         explored = {root.config: root}
+        refining = getattr(space, "refining", False)
+        self.next_refine, self.refined = 0.0, None
         self.open: list[_Node] = [root]
         self.best: _Node | None = None
         stop_at = self.deadline
@@ -215,6 +243,8 @@ class _LaCAM:
                 break
             if self.best is not None and self.rng.random() < RESTART:
                 self.open.append(root)  # lacam3's random insertion: search again from the start
+            if self.best is not None and refining is not False and time.perf_counter() >= self.next_refine:
+                self._refine(explored, stop_at)
             node = self.open[-1]
             if self.best is not None and node.g + node.h >= self.best.g:
                 self.open.pop()
@@ -268,17 +298,56 @@ class _LaCAM:
         self.stats["cost"] = self.best.g
         return ("optimal" if exhausted else "feasible"), self._steps(self.best), self.stats
 
+    def _refine(self, explored: dict, deadline: float | None) -> None:
+        """One refinement of the best schedule (:meth:`PoseSpace.refine`), its configurations
+        added to the search as lacam3 does (known ones rewired); the search then runs as long."""
+        began = time.perf_counter()
+        changed = self.refined is not self.best
+        configs = self._configs(self.best) if changed else None
+        self.refined = self.best
+        plan = self.space.refine(configs, self.rng, deadline)
+        if plan is not None:
+            node = explored[plan[0]]
+            for a, b in zip(plan, plan[1:]):
+                actions, cost = self.space.actions(a, b), self.space.cost(a, b)
+                known = explored.get(b)
+                if known is None:
+                    known = explored[b] = self.node(b, node, actions, node.g + cost)
+                    node.edges[known] = (actions, cost)
+                    self.open.append(known)
+                else:
+                    node.edges.setdefault(known, (actions, cost))
+                    self._rewire(node)
+                node = known
+            if self.space.is_goal(node.config):
+                self._found(node)
+            self.refined = self.best
+            self.stats["refined"] = self.stats.get("refined", 0) + 1
+        now = time.perf_counter()
+        self.next_refine = now + (now - began) / REFINE_RATIO
+
+    @staticmethod
+    def _configs(node: _Node) -> list:
+        configs = []
+        while node is not None:
+            configs.append(node.config)
+            node = node.parent
+        return configs[::-1]
+
     def _improvement_deadline(self) -> float:
         end = time.perf_counter() + self.improve
         return end if self.deadline is None else min(end, self.deadline)
 
     def _found(self, node: _Node) -> None:
-        if self.best is None or node.g < self.best.g:
+        """A goal node: the best if cheaper than the best so far (whose cost a rewiring may have
+        lowered in place: ``improvements`` records the costs as they were found)."""
+        known = self.stats["improvements"]
+        if self.best is None or node.g < known[-1][1]:
             elapsed = round(time.perf_counter() - self.start, 6)
             if self.best is None:
                 self.stats["first_s"], self.stats["first_cost"] = elapsed, node.g
             self.best = node
-            self.stats["improvements"].append([elapsed, node.g])
+            known.append([elapsed, node.g])
 
     def _rewire(self, root: _Node) -> None:
         """LaCAM*'s Dijkstra update: lower the cost of every node reachable from ``root`` through

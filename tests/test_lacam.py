@@ -272,3 +272,54 @@ def test_suo_makes_lacam_spread_robots_on_a_benchmark_map():
     finally:
         lacam.SCATTER_SHARE = saved
     assert sum_of_costs(inst, with_suo.schedule) <= sum_of_costs(inst, plain.schedule)
+
+
+def test_refinement_keeps_schedules_valid_and_never_costlier():
+    from random import Random as R
+
+    from bille.heuristics.refine import Paths, refine_once
+    from bille.instances.generators.movingai import from_movingai
+    from bille.tools.bench.mapf import shipped_maps, sum_of_costs
+
+    folder = shipped_maps()
+    inst = from_movingai(folder / "room-32-32-4.map", folder / "room-32-32-4-random-1.scen", agents=40)
+    result = checked(inst, objective="sum-of-loss", improve=1.0)
+    gains = [cost for _, cost in result.stats["improvements"]]
+    assert gains == sorted(gains, reverse=True) and result.stats.get("refined", 0) >= 0
+    # the refinement alone, forty neighbourhoods on the first schedule: paths stay conflict-free
+    from bille.heuristics.joint import JointProblem
+    from bille.heuristics.pibt import Classic
+
+    first = checked(inst, objective="sum-of-loss", improve=0.0)
+    problem = JointProblem.of(inst, "lacam")
+    nbrs = Classic(problem, R(0)).nbrs
+    goals = [int(w.goal_poses(c)[0]) for w, c in zip(problem.walks, problem.goals)]
+    configs, poses = [tuple(problem.start)], list(problem.start)
+    from bille.instances.schedule import bind
+
+    ids = bind(inst, first.schedule)
+    for t in range(ids.shape[1]):
+        poses = [int(problem.walks[i].succ[p, ids[i, t]]) for i, p in enumerate(poses)]
+        configs.append(tuple(poses))
+    paths = []
+    for i, g in enumerate(goals):
+        end = len(configs) - 1
+        while end > 0 and configs[end - 1][i] == g:
+            end -= 1
+        paths.append([c[i] for c in configs[:end + 1]])
+    table = Paths(paths, len(nbrs))
+    before = sum(len(p) - 1 for p in table.paths)
+    assert before == sum_of_costs(inst, first.schedule)
+    rng = R(1)
+    saved = sum(refine_once(table, nbrs, problem.dist_lists, goals, rng, None) for _ in range(40))
+    after = sum(len(p) - 1 for p in table.paths)
+    assert saved == before - after >= 0
+    steps = []
+    for t in range(max(map(len, table.paths))):
+        a = tuple(p[min(t, len(p) - 1)] for p in table.paths)
+        b = tuple(p[min(t + 1, len(p) - 1)] for p in table.paths)
+        steps.append(tuple(next(act for act, q, _ in problem.moves(i, x) if q == y) for i, (x, y) in enumerate(zip(a, b))))
+    from bille.heuristics.joint import to_result
+
+    refined = to_result(inst, "lacam", "feasible", steps, stats={})
+    assert validate(inst, refined.schedule).valid and sum_of_costs(inst, refined.schedule) == after
