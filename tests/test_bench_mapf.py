@@ -64,3 +64,18 @@ def test_peer_schedules_are_checked_by_the_validator():
                  peers={"lacam3": {"status": "feasible", "time_s": 0.5, "soc": good["soc"]}})]
     lines = peers_table(rows, ["lacam3"])
     assert "2.00x" in lines[2] and "1.000" in lines[2] and "bille 2, lacam3 2" in lines[-2]
+
+
+def test_bench_scale_measures_lacam_against_the_static_bound(capsys):
+    from bille.tools.bench.scale import scale_instance, scale_rows
+
+    inst = scale_instance(16, 6, 0.15, seed=1)
+    assert inst.num_robots == 6 and int(inst.start.obstacles.sum()) == int(0.15 * 256)
+    (row,) = scale_rows(16, [6], [0.15], seed=1, temporal_steps=2)
+    assert row["valid"] and row["bound"] <= row["makespan"] and row["temporal_ms"] is not None
+    result = solve(inst, "lacam", improve=0.0)
+    assert validate(inst, result.schedule).valid
+    code, out, err = run(capsys, "bench", "scale", "--size", "16", "--robots", "4", "--obstacles", "10")
+    assert code == 0 and "lower bound" in out, err
+    code, _, err = run(capsys, "bench", "scale", "--obstacles", "60")
+    assert code == 2 and "below 50" in err
