@@ -316,6 +316,29 @@ def bench_lacam(size: int, robots: str, seed: int) -> int:
     return EXIT_OK
 
 
+@bench.command("scale")
+@click.option("--robots", default="50,100,200,500", show_default=True, help="Comma-separated robot counts.")
+@click.option("--obstacles", default="10,20", show_default=True, help="Comma-separated obstacle shares in percent.")
+@click.option("--size", type=click.IntRange(16, 256), default=64, show_default=True)
+@click.option("--seed", type=int, default=0, show_default=True)
+@click.option("--time-limit", type=click.FloatRange(min=1), default=120.0, show_default=True)
+def bench_scale(robots: str, obstacles: str, size: int, seed: int, time_limit: float) -> int:
+    """Bill-E planners at scale: LaCAM*'s first schedule for S7 robots on a map with obstacles,
+    its makespan against the static bound, and Temporal A*'s time per replanning step."""
+    from .scale import scale_rows, scale_table
+
+    shares = [v / 100 for v in _counts(obstacles, "--obstacles", "obstacle shares")]
+    if max(shares) >= 0.5:
+        raise click.BadParameter(f"{obstacles!r}: obstacle shares must be below 50", param_hint="--obstacles")
+    rows = []
+    for row in scale_rows(size, _counts(robots, "--robots", "robot counts"), shares, seed, time_limit):
+        rows.append(row)
+        click.echo(f"{round(row['obstacles'] * 100)} % obstacles, {row['robots']} robots: {row['status']}", err=True)
+    for line in scale_table(rows):
+        click.echo(line)
+    return EXIT_OK
+
+
 def _names(text: str) -> list[str]:
     """The non-empty entries of a comma-separated option."""
     return [part.strip() for part in text.split(",") if part.strip()]
