@@ -7,7 +7,7 @@ from typing import Any
 from .metrics import Metrics
 from .schedule import Schedule
 
-STATUSES = ("optimal", "feasible", "infeasible", "timeout", "unsolved", "error")
+STATUSES = ("optimal", "feasible", "infeasible", "timeout", "unsolved", "interrupted", "error")
 
 
 @dataclass(frozen=True)
@@ -18,9 +18,10 @@ class Result:
     unless ``stats["objective"]`` names another), ``feasible`` (schedule, no proof),
     ``infeasible`` (proof that no schedule exists at all), ``timeout`` (the time limit ended the
     run, no schedule), ``unsolved`` (the method gave up before its time limit, no schedule, never
-    a proof: the reason in ``stats["failure"]``), ``error`` (the method failed, or its proofs
-    contradict its schedule; see ``stats``). ``lower_bound``: the best proved lower bound on the
-    makespan (None with ``infeasible``).
+    a proof: the reason in ``stats["failure"]``), ``interrupted`` (the user stopped it: the best
+    schedule found so far, if any, and the best bound proved are kept), ``error`` (the method
+    failed, or its proofs contradict its schedule; see ``stats``). ``lower_bound``: the best
+    proved lower bound on the makespan (None with ``infeasible``, and where none was computed).
     """
 
     method: str

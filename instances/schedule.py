@@ -2,7 +2,9 @@
 
 A schedule is one list of action names per robot, all of one length; step ``t`` (1-based) is the
 joint action made of every robot's ``t``-th action. Names are bound to action ids of each robot's
-moveset by :func:`bind`, which is where a schedule is matched to its instance.
+moveset by :func:`bind`, which is where a schedule is matched to its instance. Solvers work on ids:
+a schedule they build from ids (:meth:`Schedule.from_ids`) is named once and keeps its ids, which
+:func:`bind` hands back for the same movesets without reading the names again.
 """
 from __future__ import annotations
 
@@ -21,11 +23,13 @@ from .yamlsource import Source, expect_list, expect_mapping, load_yaml_file, loa
 
 @dataclass(frozen=True)
 class Schedule:
-    """Action names per robot (``actions[i][t]``); ``origin`` remembers the file it came from."""
+    """Action names per robot (``actions[i][t]``); ``origin`` remembers the file it came from,
+    ``ids`` the movesets and action ids it was built from (:meth:`from_ids`)."""
 
     actions: tuple[tuple[str, ...], ...]
     meta: dict[str, Any] | None = field(default=None, hash=False)
     origin: Source | None = field(default=None, compare=False, hash=False, repr=False)
+    ids: tuple | None = field(default=None, compare=False, hash=False, repr=False)
 
     @property
     def num_robots(self) -> int:
@@ -42,8 +46,11 @@ class Schedule:
         ids = np.asarray(ids, dtype=np.int64)
         if instance.num_robots == 0:
             return cls((), meta)
-        ids = ids.reshape(instance.num_robots, -1)
-        return cls(tuple(tuple(ms.actions[a].name for a in row) for ms, row in zip(instance.movesets, ids.tolist())), meta)
+        movesets = instance.movesets
+        ids = ids.reshape(instance.num_robots, -1).copy()
+        ids.flags.writeable = False
+        names = tuple(tuple(ms.actions[a].name for a in row) for ms, row in zip(movesets, ids.tolist()))
+        return cls(names, meta, None, (movesets, ids))
 
 
 def bind(instance: Instance, schedule: Schedule) -> np.ndarray:
@@ -52,6 +59,8 @@ def bind(instance: Instance, schedule: Schedule) -> np.ndarray:
     Raises :class:`ScheduleError` (naming the file and line when known) if the robot count differs
     or an action is not in the robot's moveset.
     """
+    if schedule.ids is not None and _same(schedule.ids[0], instance.movesets):
+        return schedule.ids[1].copy()  # built from these ids for these movesets: no names to read
     src = schedule.origin or Source(None, ScheduleError)
     if schedule.num_robots != instance.num_robots:
         raise src.fail(("robots",), f"{schedule.num_robots} robots, but instance '{instance.name}' "
@@ -66,6 +75,10 @@ def bind(instance: Instance, schedule: Schedule) -> np.ndarray:
             raise src.fail(("robots", i, t), f"unknown action {row[t]!r} for robot {i}'s moveset "
                                              f"{ms.name} (expected one of: {', '.join(ms.names)})") from None
     return ids
+
+
+def _same(movesets: tuple, others: tuple) -> bool:
+    return len(movesets) == len(others) and all(a is b for a, b in zip(movesets, others))
 
 
 def load_schedule(path: str | Path) -> Schedule:

@@ -7,6 +7,7 @@ solve start fast.
 """
 from __future__ import annotations
 
+import dataclasses as _dataclasses
 import inspect as _inspect
 import time as _time
 
@@ -24,16 +25,33 @@ __all__ = ["Bounds", "CLASSIC", "METHODS", "Metrics", "OptionError", "Report", "
            "validate"]
 
 
-def solve(instance: Instance, method: str, progress=None, **options) -> Result:
+_clock = _time.perf_counter  # the clock of solve()'s time limit (a test may replace it)
+_INTERNAL = ("bounds", "progress")  # handed to a method by solve(), never given as options
+
+
+def solve(instance: Instance, method: str, progress=None, *, bound: bool = False, **options) -> Result:
     """Solve ``instance`` with ``method`` (a key of :data:`METHODS`).
 
     Options are checked by type and range first (:mod:`.options`). ``progress``, a callable, is
-    handed to the methods that report progress (``anytime``; see its docstring). The static lower bound
-    (:mod:`.bounds`) is computed once, here, and handed to the methods that search from it. The
-    returned schedule is validated here: a schedule that breaks a rule turns the result into
-    status ``error`` (with the violation in ``stats``) instead of reaching the user. So does a
+    handed to the methods that report progress (``anytime``; see its docstring), and told the
+    static bound as soon as it is known.
+
+    The static lower bound (:mod:`.bounds`) is computed once, here, where it is used: before the
+    methods that search from it (those whose planning function takes ``bounds``: the exact and
+    anytime methods), which get the time left; and, with ``bound=True``, after any other method
+    (so it does not change the schedule found). Without it the result's ``lower_bound`` is the
+    method's own proof, or None. ``time_limit`` covers the whole call, the bound included: past
+    it the bound leaves out its slow part (the routing LP), and a method left no time does not
+    run (status ``timeout``).
+
+    The returned schedule is validated here, once: a schedule that breaks a rule turns the result
+    into status ``error`` (with the violation in ``stats``) instead of reaching the user. So does a
     contradiction between proofs: a lower bound above the makespan found, a schedule where a
     static argument proved that none exists, or ``optimal`` makespan without a matching proof.
+
+    Ctrl-C (``KeyboardInterrupt``) ends the call with status ``interrupted``: a method that holds
+    a schedule or a proved bound returns them itself; otherwise the result keeps the static bound,
+    if it was computed, and no schedule.
 
     >>> from bille.instances import instance_from_text
     >>> inst = instance_from_text("grid: |\\n  TTT\\nmoveset: point\\nrobots: [{at: [0, 0]}]\\nrobot_goals: [[2, 0]]")
@@ -46,21 +64,63 @@ def solve(instance: Instance, method: str, progress=None, **options) -> Result:
     if instance.collisions == "classic" and method not in CLASSIC:
         raise OptionError(f"instance '{instance.name}' uses classic collisions; {method} plans under the Bill-E "
                           f"rule only (classic: {', '.join(CLASSIC)})")
-    options = check_options(method, plan, options, internal=("bounds", "progress"))
+    options = check_options(method, plan, options, internal=_INTERNAL)
+    accepted = _inspect.signature(plan).parameters
+    start = _clock()
+    limit = options.get("time_limit", accepted["time_limit"].default if "time_limit" in accepted else None)
+    deadline = None if limit is None else start + limit
+    bounds, bound_s = None, None
+    try:
+        if "bounds" in accepted:  # the method searches from the bound: first, and it gets the time left
+            bounds, bound_s = _static_bound(instance, deadline, start, progress)
+            options["bounds"] = bounds
+            if limit is not None and "time_limit" in accepted:
+                options["time_limit"] = limit - bound_s
+        if progress is not None and "progress" in accepted:
+            options["progress"] = progress
+        left = options.get("time_limit")
+        if left is not None and left <= 0:
+            result = Result(method, "timeout", stats={"failure": "the time limit ran out computing the lower bound"})
+        else:
+            result = plan(instance, **options)
+    except KeyboardInterrupt:  # a method with nothing to keep lets it through
+        result = Result(method, "interrupted")
+    if bound and bounds is None and result.status != "interrupted":  # after the method, in the time left
+        try:
+            bounds, bound_s = _static_bound(instance, deadline, _clock(), progress)
+        except KeyboardInterrupt:
+            result = _dataclasses.replace(result, status="interrupted")
+    return _checked(instance, method, result, bounds, bound_s, _clock() - start)
+
+
+def _static_bound(instance: Instance, deadline: float | None, began: float, progress):
+    """The static bound, its slow part left out past the ``deadline`` (of :data:`_clock`), and
+    the seconds it took since ``began``; ``progress`` is told it."""
     from .bounds import lower_bound
 
-    start = _time.perf_counter()
-    bounds = lower_bound(instance)
-    accepted = _inspect.signature(plan).parameters
-    if "bounds" in accepted:
-        options["bounds"] = bounds
-    if progress is not None and "progress" in accepted:
-        options["progress"] = progress
-    result = plan(instance, **options)
-    elapsed = _time.perf_counter() - start
+    bounds = lower_bound(instance, time_limit=None if deadline is None else deadline - _clock())
+    seconds = _clock() - began
+    if progress is not None:
+        progress({"lower": bounds.lower, "best": None, "elapsed": seconds})
+    return bounds, seconds
+
+
+def __getattr__(name: str):
+    if name in ("Bounds", "lower_bound"):  # imported on use: scipy is slow to load
+        from . import bounds
+
+        return getattr(bounds, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def _checked(instance: Instance, method: str, result: Result, bounds, bound_s: float | None, elapsed: float) -> Result:
+    """The method's result as solve() returns it: its schedule validated (once), the best lower
+    bound known, contradictions between proofs turned into status ``error``."""
     fields = dict(method=method, status=result.status, schedule=result.schedule, metrics=result.metrics,
                   lower_bound=_lower(result, bounds), time_s=elapsed, stats=dict(result.stats))
-    fields["stats"].setdefault("bound_parts", bounds.parts)
+    if bounds is not None:
+        fields["stats"].setdefault("bound_parts", bounds.parts)
+        fields["stats"]["bound_s"] = round(bound_s, 3)
     if result.schedule is not None:
         report = validate(instance, result.schedule)
         if report.valid:
@@ -72,19 +132,13 @@ def solve(instance: Instance, method: str, progress=None, **options) -> Result:
     return Result(**fields)
 
 
-def __getattr__(name: str):
-    if name in ("Bounds", "lower_bound"):  # imported on use: scipy is slow to load
-        from . import bounds
-
-        return getattr(bounds, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
 def _lower(result: Result, bounds) -> int | None:
-    """The best lower bound known: the static one, or the method's proof if higher. None for a
-    proof that no schedule exists."""
+    """The best lower bound known: the method's proof, or the static bound if computed and
+    higher. None for a proof that no schedule exists, and where neither is known."""
     if result.status == "infeasible":
         return None
+    if bounds is None:
+        return result.lower_bound
     return max(bounds.lower, result.lower_bound or 0)
 
 
@@ -92,7 +146,7 @@ def _contradiction(fields: dict, result: Result, bounds) -> None:
     """Turn a result whose proofs contradict its valid schedule into status ``error``."""
     makespan, lower, stats = fields["metrics"].makespan, fields["lower_bound"], fields["stats"]
     why = None
-    if bounds.impossible:
+    if bounds is not None and bounds.impossible:
         why = f"a valid schedule of makespan {makespan}, but no schedule should exist: {'; '.join(bounds.impossible)}"
     elif lower is not None and lower > makespan:
         why = f"lower bound {lower} above the makespan {makespan} of a valid schedule"

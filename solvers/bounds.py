@@ -64,6 +64,7 @@ Checked against the brute-force search (``bille solve -m bfs``) on random tiny i
 """
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -87,8 +88,12 @@ class Bounds:
     impossible: list[str]
 
 
-def lower_bound(instance: Instance) -> Bounds:
-    """The makespan lower bound of the module docstring, and static proofs of infeasibility."""
+def lower_bound(instance: Instance, *, time_limit: float | None = None) -> Bounds:
+    """The makespan lower bound of the module docstring, and static proofs of infeasibility.
+
+    ``time_limit`` (seconds) limits the linear program of the routing part, the one part that
+    can take long: past it, that part is left out (None)."""
+    deadline = None if time_limit is None else time.perf_counter() + time_limit
     world = instance.world
     state = instance.start_state
     start, goal = instance.start.tiles, instance.goal_tiles
@@ -128,7 +133,7 @@ def lower_bound(instance: Instance) -> Bounds:
             impossible.append("the tiles that must go cannot all be carried to cells that must be filled")
         else:
             parts["carrying (matching)"] = -(-(carry + carried) // m)
-            parts["routing (LP)"] = routing_bound(instance, _by_target)
+            parts["routing (LP)"] = routing_bound(instance, _by_target, deadline)
     lower = max([v for v in parts.values() if v is not None] + [0])
     return Bounds(lower, parts, impossible)
 

@@ -34,6 +34,8 @@ The program has two arcs per pair of cells, so it is built only for instances of
 """
 from __future__ import annotations
 
+import time
+
 import numpy as np
 from scipy.optimize import linprog
 from scipy.sparse import coo_matrix
@@ -45,9 +47,10 @@ from bille.instances.moveset import Kind
 MAX_CELLS = 200
 
 
-def routing_bound(instance: Instance, by_target) -> int | None:
+def routing_bound(instance: Instance, by_target, deadline: float | None = None) -> int | None:
     """``ceil(LP / m)`` of the module docstring, or None when the program is not built (too
-    many cells) or not solved. ``by_target(graph, kind, n)`` lists ``(pose, cell)`` pairs."""
+    many cells) or not solved by the ``deadline`` (a ``time.perf_counter()`` value).
+    ``by_target(graph, kind, n)`` lists ``(pose, cell)`` pairs."""
     world, state = instance.world, instance.start_state
     n = world.width * world.height
     graphs = list({id(g): g for g in world.graphs}.values())
@@ -98,7 +101,7 @@ def routing_bound(instance: Instance, by_target) -> int | None:
         robot_rows.append((row, int(to_goal[p]), bool(state.carrying[r])))
         place = faces[Kind.PLACE][id(g)]
         ends = np.minimum(ends, [to_goal[place[c]].min() if c in place else INF for c in cells])
-    return _solve(k, m, balance, carry, walk, ends, robot_rows)
+    return _solve(k, m, balance, carry, walk, ends, robot_rows, deadline)
 
 
 def _mask(n: int, cells: list[int]) -> np.ndarray:
@@ -107,7 +110,7 @@ def _mask(n: int, cells: list[int]) -> np.ndarray:
     return out
 
 
-def _solve(k, m, balance, carry, walk, ends, robot_rows) -> int | None:
+def _solve(k, m, balance, carry, walk, ends, robot_rows, deadline: float | None) -> int | None:
     """Build and solve the program: variables are arc flows; rows are the robot supplies (0 ..
     m-1), the conservation at the pick nodes (``K``) and the place nodes (``P``: inflow minus
     outflow is 0), and the tile balance per cell (``B``: arcs into its place node minus arcs
@@ -146,7 +149,12 @@ def _solve(k, m, balance, carry, walk, ends, robot_rows) -> int | None:
     a = coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
                    shape=(m + 3 * k, base)).tocsr()
     b = np.concatenate([np.ones(m), np.zeros(2 * k), balance])
-    got = linprog(np.concatenate(costs), A_eq=a, b_eq=b, bounds=(0, None), method="highs")
-    if got.status != 0:
+    options = {}
+    if deadline is not None:
+        options["time_limit"] = deadline - time.perf_counter()
+        if options["time_limit"] <= 0:
+            return None
+    got = linprog(np.concatenate(costs), A_eq=a, b_eq=b, bounds=(0, None), method="highs", options=options)
+    if got.status != 0:  # not solved (in time): no bound from the program
         return None
     return int(np.ceil(got.fun / m - 1e-6))

@@ -210,7 +210,7 @@ def test_an_instance_the_complete_planner_exhausts_is_infeasible():
 def test_gave_up_and_out_of_time_are_told_apart():
     deadlock = solve(load_instance(bundled_path("crowded-2")), "temporal-astar", time_limit=60)
     assert deadlock.status == "unsolved" and deadlock.stats["failure"] == "deadlock" and deadlock.time_s < 60
-    late = solve(load_instance(bundled_path("compare-6")), "mstar", time_limit=0.05)
+    late = solve(load_instance(bundled_path("compare-6")), "mstar", time_limit=0.05, bound=True)
     assert late.status == "timeout" and late.schedule is None and late.lower_bound is not None
 
 

@@ -47,7 +47,8 @@ def test_limits_give_unsolved_with_a_proved_lower_bound():
     result = plan(inst, max_steps=3)  # the search's own proof: nothing within 3 steps
     assert result.status == "unsolved" and result.lower_bound == 4 and result.schedule is None
     assert result.stats["failure"] == "step bound"
-    assert solve(inst, "bfs", max_steps=3).lower_bound == 7  # solve() adds the static bound
+    assert solve(inst, "bfs", max_steps=3).lower_bound == 4  # the static bound only where asked for
+    assert solve(inst, "bfs", max_steps=3, bound=True).lower_bound == 7
 
 
 def test_unknown_options_are_rejected():

@@ -64,7 +64,7 @@ def test_inflated_search_stays_within_epsilon(method, epsilon):
 @pytest.mark.parametrize("horizon", [5, 8])
 def test_temporal_astar_plans_valid_schedules(name, horizon):
     inst = load_instance(bundled_path(name))
-    result = solve(inst, "temporal-astar", horizon=horizon)
+    result = solve(inst, "temporal-astar", horizon=horizon, bound=True)
     assert result.status == "feasible", result.stats
     assert validate(inst, result.schedule).valid
     assert result.metrics.makespan >= result.lower_bound

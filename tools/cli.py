@@ -12,7 +12,7 @@ import click
 from bille.instances import BilleError
 
 from .bench.commands import bench
-from .common import EXIT_OK, EXIT_USAGE
+from .common import EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE
 from .convert import convert
 from .execute.commands import robot_sim, run
 from .files_commands import check, list_, show
@@ -43,8 +43,8 @@ def main(argv: list[str] | None = None) -> int:
         click.echo(f"{cmd}: {exc.format_message().rstrip('.')} (see '{cmd} --help')", err=True)
         code = EXIT_USAGE
     except click.exceptions.Abort:
-        click.echo("bille: aborted", err=True)
-        code = 130
+        click.echo("bille: interrupted", err=True)
+        code = EXIT_INTERRUPTED
     except BilleError as exc:
         click.echo(f"bille: error: {exc}", err=True)
         code = EXIT_USAGE

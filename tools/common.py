@@ -11,7 +11,7 @@ from bille.instances import BilleError, InstanceError, ScheduleError, load_insta
 from bille.instances.bundled import resolve
 from bille.solvers import load_schedule
 
-EXIT_OK, EXIT_NO, EXIT_USAGE = 0, 1, 2
+EXIT_OK, EXIT_NO, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
 
 
 def instance_arg(arg: str, *, check: bool = True):
@@ -40,33 +40,48 @@ def stderr_console():
 
 
 class LiveLine:
-    """One line on the terminal, rewritten in place as a long solve goes (stderr, only when it is
-    a terminal; silent otherwise, and with ``--json``). Used as the ``progress`` of ``solve()``."""
+    """One line on the terminal while a solve runs, from its first second: the method, the
+    bound and the best makespan known, the horizon being decided, the seconds elapsed (a
+    ``rich.progress`` line on stderr, only when it is a terminal; silent otherwise, and with
+    ``--json``). Used as a context manager and as the ``progress`` of ``solve()``."""
 
     def __init__(self, method: str, enabled: bool) -> None:
         import sys
 
         self.method, self.stream = method, sys.stderr
         self.enabled = enabled and self.stream.isatty()
-        self.width = 0
+        self.lower = self.best = self.horizon = None
+        self.bar = None
+
+    def __enter__(self) -> "LiveLine":
+        if self.enabled:
+            from rich.console import Console
+            from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
+
+            self.bar = Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(),
+                                console=Console(file=self.stream), transient=True, refresh_per_second=4)
+            self.task = self.bar.add_task(self._text())
+            self.bar.start()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        if self.bar is not None:
+            self.bar.stop()
+            self.bar = None
 
     def __call__(self, event: dict) -> None:
-        if not self.enabled:
-            return
         if "horizon" in event:
-            text = f"{self.method}: horizon {event['horizon']} {event['answer']} in {event['time_s']:.1f} s"
+            self.horizon = f"horizon {event['horizon']} {event['answer']} in {event['time_s']:.1f} s"
         else:
-            best = "-" if event["best"] is None else event["best"]
-            text = f"{self.method}: makespan in [{event['lower']}, {best}]"
-        text += f", {event['elapsed']:.1f} s elapsed"
-        self.stream.write("\r" + text.ljust(self.width))
-        self.stream.flush()
-        self.width = len(text)
+            self.lower = self.lower if event.get("lower") is None else event["lower"]
+            self.best = self.best if event.get("best") is None else event["best"]
+        if self.bar is not None:
+            self.bar.update(self.task, description=self._text())
 
-    def close(self) -> None:
-        if self.enabled and self.width:
-            self.stream.write("\r" + " " * self.width + "\r")
-            self.stream.flush()
+    def _text(self) -> str:
+        text = f"{self.method}: makespan lower bound {'-' if self.lower is None else self.lower}, best schedule "
+        text += "none yet" if self.best is None else str(self.best)
+        return text + ("" if self.horizon is None else f"; {self.horizon}")
 
 
 def writable(*paths) -> None:
@@ -130,3 +145,34 @@ def output_folder(out: str) -> Path:
     except OSError as exc:
         raise BilleError(f"{folder}: cannot create the output folder ({exc.strerror})") from None
     return folder
+
+
+def status_text(result) -> str:
+    """The status as the user reads it: ``optimal`` names its objective where it is not the
+    makespan (``optimal (sum of costs)``)."""
+    objective = result.stats.get("objective")
+    if result.status == "optimal" and objective:
+        return f"optimal ({objective.split(', then')[0].split(' (')[0]})"
+    return result.status
+
+
+def summary_line(label: str, result) -> str:
+    """One line: the status, the time, the schedule's metrics and the makespan lower bound (or
+    that none was computed)."""
+    m = result.metrics
+    text = f"{label}: {status_text(result)} in {result.time_s:.3f} s"
+    if m is not None:
+        text += f"; makespan {m.makespan}, tiles traveled {m.tiles_traveled}, waits {m.waits}"
+    if result.lower_bound is not None:
+        text += f"; makespan lower bound {result.lower_bound}"
+    elif result.status != "infeasible":
+        text += "; no makespan lower bound computed (--bound to compute one)"
+    return text
+
+
+def exit_code(result) -> int:
+    """130 for ``interrupted`` (what was found is printed and written all the same), 0 with a
+    schedule, 1 without."""
+    if result.status == "interrupted":
+        return EXIT_INTERRUPTED
+    return EXIT_OK if result.schedule is not None else EXIT_NO

@@ -158,7 +158,7 @@ def _solve_row(inst, config: Config, time_limit, threads, progress, schedules) -
     if config.method == "cpsat" and "threads" not in config.options:
         options["threads"] = threads
     try:
-        result = solve(inst, config.method, **options)
+        result = solve(inst, config.method, bound=True, **options)
     except OptionError as exc:
         return _row(inst, config.label, "n/a", note=str(exc))
     if schedules is not None and result.schedule is not None:

@@ -6,8 +6,8 @@ import yaml
 
 from bille.solvers import METHODS, save_schedule, solve
 
-from .common import (EXIT_NO, EXIT_OK, LiveLine, instance_arg, label_of, print_json, record_traces, schedule_arg,
-                     trace_of, writable)
+from .common import (EXIT_NO, EXIT_OK, LiveLine, exit_code, instance_arg, label_of, print_json, record_traces,
+                     schedule_arg, summary_line, trace_of, writable)
 
 
 @click.command("solve")
@@ -15,11 +15,13 @@ from .common import (EXIT_NO, EXIT_OK, LiveLine, instance_arg, label_of, print_j
 @click.option("--method", "-m", type=click.Choice(list(METHODS)), default="temporal-astar", show_default=True)
 @click.option("--epsilon", type=click.FloatRange(min=1.0), help="Heuristic weight (astar, mstar, temporal-astar).")
 @click.option("--horizon", "-H", type=click.IntRange(min=1), help="Steps planned ahead (temporal-astar).")
-@click.option("--time-limit", type=float, help="Seconds before giving up.")
+@click.option("--time-limit", type=float, help="Seconds for the whole call, the lower bound included.")
 @click.option("--threads", type=click.IntRange(min=1), help="Solver workers (cpsat).")
 @click.option("--load-transfer", is_flag=True, default=None,
               help="Reconfiguration (temporal-astar, mstar): robots exchange loads (paper, equations 1-3).")
 @click.option("--d-tr", type=click.IntRange(min=0), help="Manhattan distance within which robots consider a load transfer.")
+@click.option("--bound", is_flag=True,
+              help="Also compute the static makespan lower bound where the method does not use it (the heuristics).")
 @click.option("-O", "--option", "extra", multiple=True, metavar="NAME=VALUE",
               help="Another option of the method, e.g. -O od=false or -O max_steps=200.")
 @click.option("--incumbent", metavar="SCHEDULE",
@@ -29,12 +31,15 @@ from .common import (EXIT_NO, EXIT_OK, LiveLine, instance_arg, label_of, print_j
 @click.option("--rerun", "rrd", type=click.Path(dir_okay=False), metavar="OUT.rrd",
               help="Write a rerun recording of the schedule found.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of text.")
-def solve_(instance: str, method: str, epsilon, horizon, time_limit, threads, load_transfer, d_tr, extra, incumbent,
-           output, rrd, as_json) -> int:
+def solve_(instance: str, method: str, epsilon, horizon, time_limit, threads, load_transfer, d_tr, bound, extra,
+           incumbent, output, rrd, as_json) -> int:
     """Solve INSTANCE with METHOD; print the status and metrics (exit 1 if no schedule).
 
     On an instance that moves tiles, temporal-astar and mstar run the reconfiguration loop: the
-    instance's tasks (or a derived sequence) are handed to the robots and carried out."""
+    instance's tasks (or a derived sequence) are handed to the robots and carried out.
+
+    Ctrl-C stops the solve: the best schedule found so far is printed and written, with the best
+    lower bound proved, and the exit code is 130."""
     if time_limit is not None and time_limit <= 0:
         raise click.BadParameter("must be positive", param_hint="--time-limit")
     writable(output, rrd)
@@ -45,25 +50,16 @@ def solve_(instance: str, method: str, epsilon, horizon, time_limit, threads, lo
     inst = instance_arg(instance)
     if incumbent is not None:
         options["incumbent"] = schedule_arg(incumbent)
-    line = LiveLine(method, not as_json)
-    try:
-        result = solve(inst, method, progress=line, **options)
-    finally:
-        line.close()
+    with LiveLine(method, not as_json) as line:
+        result = solve(inst, method, progress=line, bound=bound, **options)
     if output and result.schedule is not None:
         save_schedule(result.schedule, output)
     if rrd:  # without a schedule the recording shows the instance
         record_traces([trace_of(inst, result.schedule, method)], rrd, quiet=as_json)
     if as_json:
         print_json(result.to_json())
-        return EXIT_OK if result.schedule is not None else EXIT_NO
-    m = result.metrics
-    text = f"{method}: {result.status} in {result.time_s:.3f} s"
-    if m is not None:
-        text += f"; makespan {m.makespan}, tiles traveled {m.tiles_traveled}, waits {m.waits}"
-    if result.lower_bound is not None:
-        text += f"; makespan lower bound {result.lower_bound}"
-    click.echo(text)
+        return exit_code(result)
+    click.echo(summary_line(method, result))
     if "objective" in result.stats:  # what optimal means when it is not the makespan of every schedule
         click.echo(f"objective: {result.stats['objective']}")
     if "restricted_lower_bound" in result.stats:
@@ -76,7 +72,7 @@ def solve_(instance: str, method: str, epsilon, horizon, time_limit, threads, lo
                    f"({result.stats['pairs_considered']} robot pairs within d_tr considered)")
     if output and result.schedule is not None:
         click.echo(f"schedule written to {output}")
-    return EXIT_OK if result.schedule is not None else EXIT_NO
+    return exit_code(result)
 
 
 @click.command("plan-sequence")

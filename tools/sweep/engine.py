@@ -157,7 +157,7 @@ def solve_in_child(outbox, text: str, method: str, options: dict, time_limit: fl
 
         inst = instance_from_text(text)
         options = {"time_limit": time_limit, **options}
-        result = solve(inst, method, **options)
+        result = solve(inst, method, bound=True, **options)
         m, lower = result.metrics, result.lower_bound
         gap = None
         if m is not None and lower:

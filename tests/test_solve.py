@@ -1,0 +1,236 @@
+"""The contract of ``solve()`` and ``bille solve`` (DESIGN §5): the time limit covers the whole
+call, the static bound is computed only where it is used or asked for, a schedule is validated
+and named once, Ctrl-C ends with status ``interrupted`` and exit 130, progress from the start."""
+from __future__ import annotations
+
+import json
+import os
+import select
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+from bille import solvers
+from bille.instances import load_instance
+from bille.instances.bundled import bundled_path
+from bille.instances.moveset import Moveset
+from bille.instances.result import Result
+from bille.solvers import METHODS, Schedule, bind, load_schedule, solve, validate
+from bille.solvers.bounds import Bounds
+
+
+class FakeClock:
+    """``solve()``'s clock, moved on by hand."""
+
+    def __init__(self) -> None:
+        self.now = 100.0
+
+    def __call__(self) -> float:
+        return self.now
+
+
+@pytest.fixture
+def clock(monkeypatch):
+    fake = FakeClock()
+    monkeypatch.setattr(solvers, "_clock", fake)
+    return fake
+
+
+@pytest.fixture
+def slow_bound(monkeypatch, clock):
+    """The static bound replaced by one that takes ``seconds[0]`` on the fake clock; ``asked``
+    records the time limit each call was given."""
+    asked, seconds = [], [7.0]
+
+    def lower_bound(instance, *, time_limit=None):
+        asked.append(time_limit)
+        clock.now += seconds[0]
+        return Bounds(3, {"slow part": 3}, [])
+
+    monkeypatch.setattr("bille.solvers.bounds.lower_bound", lower_bound)
+    return asked, seconds
+
+
+def spy_method(clock, seen, spends=0.0):
+    """A method that takes the bound (as exact and anytime do), records what it was given and
+    spends ``spends`` seconds on the fake clock."""
+    def plan(instance, *, time_limit: float = 60.0, bounds=None, progress=None) -> Result:
+        seen.append((time_limit, None if bounds is None else bounds.lower))
+        clock.now += spends
+        return Result("spy", "timeout", lower_bound=None)
+    return plan
+
+
+def spy_heuristic(clock, seen, spends=0.0):
+    """A method that does not take the bound (as the heuristics)."""
+    def plan(instance, *, time_limit: float | None = None) -> Result:
+        seen.append(time_limit)
+        clock.now += spends
+        return Result("spy", "unsolved", stats={"failure": "deadlock"})
+    return plan
+
+
+POINT4 = load_instance(bundled_path("point-4"))
+
+
+def test_a_method_that_uses_the_bound_gets_the_time_it_left(monkeypatch, clock, slow_bound):
+    asked, _ = slow_bound
+    seen = []
+    monkeypatch.setitem(METHODS, "anytime", spy_method(clock, seen, spends=2.0))
+    result = solve(POINT4, "anytime", time_limit=10)
+    assert asked == [10.0] and seen == [(3.0, 3)]  # 7 s of bound, 3 s left for the method
+    assert result.time_s == 9.0 and result.lower_bound == 3 and result.stats["bound_s"] == 7.0
+
+
+def test_a_bound_that_takes_the_whole_limit_leaves_the_method_out(monkeypatch, clock, slow_bound):
+    _, seconds = slow_bound
+    seconds[0] = 12.0
+    seen = []
+    monkeypatch.setitem(METHODS, "anytime", spy_method(clock, seen))
+    result = solve(POINT4, "anytime", time_limit=10)
+    assert seen == [] and result.status == "timeout" and result.lower_bound == 3
+    assert "lower bound" in result.stats["failure"]
+
+
+def test_the_default_time_limit_of_a_method_counts_too(monkeypatch, clock, slow_bound):
+    seen = []
+    monkeypatch.setitem(METHODS, "anytime", spy_method(clock, seen))
+    solve(POINT4, "anytime")
+    assert seen == [(53.0, 3)]  # the method's default 60 s, less the 7 s of the bound
+
+
+def test_a_heuristic_computes_no_bound_unless_asked(monkeypatch, clock, slow_bound):
+    asked, _ = slow_bound
+    seen = []
+    monkeypatch.setitem(METHODS, "temporal-astar", spy_heuristic(clock, seen, spends=4.0))
+    plain = solve(POINT4, "temporal-astar", time_limit=10)
+    assert asked == [] and seen == [10] and plain.lower_bound is None and "bound_parts" not in plain.stats
+    asked_for = solve(POINT4, "temporal-astar", time_limit=10, bound=True)
+    assert seen == [10, 10]  # the same time for the method: the bound comes after it
+    assert asked == [6.0] and asked_for.lower_bound == 3 and asked_for.stats["bound_parts"] == {"slow part": 3}
+
+
+def test_past_its_time_the_bound_leaves_out_its_linear_program():
+    from bille.solvers.bounds import lower_bound
+
+    inst = load_instance(bundled_path("lt-1"))
+    full, cut = lower_bound(inst), lower_bound(inst, time_limit=0)
+    assert full.parts["routing (LP)"] is not None and cut.parts["routing (LP)"] is None
+    assert cut.lower == max(v for k, v in full.parts.items() if k != "routing (LP)") <= full.lower
+
+
+def test_the_cli_says_when_no_bound_was_computed(cli, capsys):
+    assert cli(["solve", "point-4", "-m", "astar"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("astar: optimal (sum of costs) in ") and "no makespan lower bound computed (--bound" in out
+    assert cli(["solve", "point-4", "-m", "astar", "--bound"]) == 0
+    out = capsys.readouterr().out
+    assert "makespan lower bound 4" in out and "no makespan lower bound" not in out
+
+
+def test_a_schedule_is_named_once_and_validated_once(monkeypatch):
+    inst = load_instance(bundled_path("corridor-2"))
+    ids = bind(inst, load_schedule(bundled_path("corridor-2.schedule")))
+    built = Schedule.from_ids(inst, ids)
+
+    def unread(self):
+        raise AssertionError("the names were read again")
+
+    with monkeypatch.context() as names:
+        names.setattr(Moveset, "index", property(unread))
+        assert np.array_equal(bind(inst, built), ids)  # the ids it was built from, no names read
+    calls = []
+    real = solvers.validate
+    monkeypatch.setattr(solvers, "validate", lambda i, s: calls.append(s) or real(i, s))
+    result = solve(inst, "temporal-astar")
+    assert calls == [result.schedule] and result.status == "feasible"
+
+
+# ---- Ctrl-C and progress, as a terminal sends and shows them --------------------------------
+
+SPY = """
+import functools, sys
+from bille.solvers import METHODS
+from bille.tools.cli import main
+
+real = METHODS["bfs"]
+
+@functools.wraps(real)
+def running(*args, **kwargs):
+    print("running", flush=True)
+    return real(*args, **kwargs)
+
+METHODS["bfs"] = running
+main(sys.argv[1:])
+"""
+
+
+def test_ctrl_c_ends_a_solve_as_interrupted_with_exit_130(tmp_path):
+    out = tmp_path / "s.yaml"
+    # its own process group, sent SIGINT as a terminal sends Ctrl-C, once the method runs
+    child = subprocess.Popen([sys.executable, "-c", SPY, "solve", "lt-1", "-m", "bfs", "-o", str(out), "--json"],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    try:
+        assert child.stdout.readline().strip() == "running"
+        os.killpg(child.pid, signal.SIGINT)
+        stdout, stderr = child.communicate(timeout=60)
+    finally:
+        if child.poll() is None:
+            os.killpg(child.pid, signal.SIGKILL)
+    assert child.returncode == 130, stderr
+    result = json.loads(stdout)
+    assert result["status"] == "interrupted" and result["metrics"] is None and "Traceback" not in stderr
+    assert not out.exists()  # nothing found, nothing written
+
+
+def test_an_interrupted_method_keeps_what_it_found(monkeypatch, cli, capsys, tmp_path):
+    inst = load_instance(bundled_path("corridor-2"))
+    found = solve(inst, "temporal-astar")
+
+    def stopped(instance, *, time_limit: float = 60.0, bounds=None, progress=None) -> Result:
+        return Result("anytime", "interrupted", found.schedule, lower_bound=bounds.lower + 1)
+
+    monkeypatch.setitem(METHODS, "anytime", stopped)
+    out = tmp_path / "s.yaml"
+    assert cli(["solve", "corridor-2", "-m", "anytime", "-o", out]) == 130
+    text = capsys.readouterr().out
+    assert text.startswith("anytime: interrupted in ") and f"makespan {found.metrics.makespan}," in text
+    assert "makespan lower bound 6" in text and validate(inst, load_schedule(out)).valid
+
+
+def _read_until(fd, needle: bytes, seconds: float) -> bytes:
+    seen, end = b"", time.monotonic() + seconds
+    while needle not in seen and time.monotonic() < end:
+        if select.select([fd], [], [], 0.5)[0]:
+            try:
+                seen += os.read(fd, 4096)
+            except OSError:
+                break
+    return seen
+
+
+@pytest.mark.parametrize("as_json", [False, True])
+def test_a_long_solve_shows_progress_from_the_start_on_a_terminal_only(as_json):
+    import pty
+
+    master, slave = pty.openpty()
+    argv = ["solve", "bridge-2", "-m", "cpsat", "--time-limit", "2"] + (["--json"] if as_json else [])
+    child = subprocess.Popen([sys.executable, "-m", "bille", *argv], stdout=subprocess.PIPE, stderr=slave,
+                             env=dict(os.environ, TERM="xterm", COLUMNS="120"), start_new_session=True)
+    os.close(slave)
+    try:
+        shown = _read_until(master, b"makespan lower bound 14", 30)
+        stdout, _ = child.communicate(timeout=60)
+        shown += _read_until(master, b"\0", 0.5)
+    finally:
+        os.close(master)
+        if child.poll() is None:
+            os.killpg(child.pid, signal.SIGKILL)
+    if as_json:
+        assert shown == b"" and json.loads(stdout)["method"] == "cpsat"
+    else:  # the bound is shown before the search's first horizon is decided
+        assert b"cpsat: makespan lower bound 14, best schedule none yet" in shown
