@@ -7,7 +7,16 @@ from __future__ import annotations
 
 
 class BilleError(Exception):
-    """Base class of every error caused by bad input to bille."""
+    """Base class of every error caused by bad input to bille. Its text is one line: a line
+    break in a value it quotes is shown as ``\\n``, so the message is always one line.
+
+    >>> str(BilleError("unknown moveset 'S7\\nTTT'"))
+    "unknown moveset 'S7\\\\nTTT'"
+    """
+
+    def __str__(self) -> str:
+        text = super().__str__()
+        return text.replace("\r", "\\r").replace("\n", "\\n") if "\n" in text or "\r" in text else text
 
 
 class MovesetError(BilleError):

@@ -236,3 +236,41 @@ def test_temporal_astar_per_robot_memory_stays_within_what_the_size_check_counts
     peak(many)  # caches warm
     extra = peak(many) - peak(few)
     assert extra <= 1.5 * (table_bytes(many) - table_bytes(few))
+
+
+# ---- found by the fuzzers (tests/test_fuzz_readers.py) ------------------------------------------
+
+
+def test_a_value_with_a_line_break_is_quoted_on_one_line(tmp_path, rejects):
+    path = tmp_path / "i.yaml"
+    path.write_text(bundled_path("corridor-2").read_text().replace("moveset: S7", 'moveset: "S7\\nTTT"'))
+    rejects(["show", path], "unknown moveset 'S7\\nTTT'")
+
+
+def test_a_signature_that_is_not_hex_is_refused_not_compared():
+    import json
+
+    from bille.tools.execute.protocol import Gate, Sealer
+
+    msg = json.loads(Sealer("r1", b"k").seal("connection", {"nonce": "n" * 8, "connectionState": "ONLINE"}))
+    msg["signature"] = "\x80" + msg["signature"][1:]
+    out = Gate({"r1": b"k"}).admit("r1", "connection", json.dumps(msg).encode())
+    assert out.reason == "bad signature"
+
+
+def test_a_signed_order_naming_a_cell_outside_the_grid_fails_the_step(caplog):
+    from test_fuzz_readers import INITIALIZE, NONCE, SECRET, _Client
+
+    from bille.tools.execute.broker import BrokerURL
+    from bille.tools.execute.protocol import Sealer
+    from bille.tools.execute.robot import SimRobot
+
+    robot = SimRobot("r1", BrokerURL("127.0.0.1", 1), SECRET)
+    robot.client, robot.nonce = _Client(), NONCE
+    robot.handle("bille/v1/default/r1/instantActions", INITIALIZE)
+    steps = [{"sequenceId": 13, "action": "place", "released": True, "structure": {"picked": [], "placed": [[0, 13]]}}]
+    order = Sealer("r1", SECRET, session="1" * 16).seal("order", {"nonce": NONCE, "orderId": "f" * 16,
+                                                                   "orderUpdateId": 1, "steps": steps})
+    robot.handle("bille/v1/default/r1/order", order)
+    assert robot.last_step == 12 and robot.errors[0]["errorType"] == "structureMismatch"
+    assert "[0, 13], outside the 10x4 grid" in robot.errors[0]["errorDescription"]

@@ -27,7 +27,7 @@ from bille.instances import BilleError, load_instance
 from bille.instances.rules import State, Violation, run
 from bille.solvers import bind, load_schedule
 
-from .protocol import ExecutionError, canonical, now
+from .protocol import ExecutionError, canonical, is_signature, now
 
 SECRET_ENV = "BILLE_FLEET_SECRET"
 EVENTS = ("run", "released", "finished", "fault", "replan", "resume", "done")
@@ -145,7 +145,7 @@ def read_events(path: str | Path, secret: bytes | None = None) -> list[dict]:
         if secret is not None:
             if not isinstance(sig, str):
                 raise ExecutionError(f"{path}:{n}: the line is not signed, but a fleet secret is set ({SECRET_ENV})")
-            if not hmac.compare_digest(sig, line_signature(secret, previous, event)):
+            if not is_signature(sig) or not hmac.compare_digest(sig, line_signature(secret, previous, event)):
                 raise ExecutionError(f"{path}:{n}: bad signature (the line was changed, moved or removed, or "
                                      f"{SECRET_ENV} is not the fleet secret the run was signed with)")
             previous = sig

@@ -82,6 +82,12 @@ def sign(body: dict, secret: bytes) -> str:
     return hmac.new(secret, canonical(body), hashlib.sha256).hexdigest()
 
 
+def is_signature(text: str) -> bool:
+    """Whether ``text`` has the form of a signature (64 lower-case hex digits): only such text is
+    compared with one (``hmac.compare_digest`` refuses text that is not ASCII)."""
+    return len(text) == 64 and all(c in "0123456789abcdef" for c in text)
+
+
 def tiles_digest(cells) -> str:
     """The digest of a tile set: SHA-256 of ``"x,y;x,y;..."`` in row-major order."""
     text = ";".join(f"{x},{y}" for x, y in sorted(cells, key=lambda c: (c[1], c[0])))
@@ -285,7 +291,7 @@ class Gate:
         sig = msg.pop("signature", None)
         if not isinstance(sig, str):
             return no("no signature")
-        if not hmac.compare_digest(sig, sign(msg, secret)):
+        if not is_signature(sig) or not hmac.compare_digest(sig, sign(msg, secret)):
             return no("bad signature")
         msg["signature"] = sig
         problem = schema_error(kind, msg)

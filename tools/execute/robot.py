@@ -218,7 +218,11 @@ class SimRobot:
         if name not in index:
             return self._fail(step, "unknownAction", f"{name!r} is not in moveset {self.graph.moveset.name}")
         a = index[name]
-        w = self.world.width
+        w, h = self.world.width, self.world.height
+        for x, y in step["structure"]["picked"] + step["structure"]["placed"]:
+            if not (0 <= x < w and 0 <= y < h):
+                return self._fail(step, "structureMismatch", f"the step's structure names [{x}, {y}], outside the "
+                                                             f"{w}x{h} grid")
         picked = {y * w + x for x, y in step["structure"]["picked"]}
         placed = {y * w + x for x, y in step["structure"]["placed"]}
         target = int(self.graph.target[self.pose, a])
