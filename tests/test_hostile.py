@@ -258,7 +258,7 @@ def test_a_signature_that_is_not_hex_is_refused_not_compared():
     assert out.reason == "bad signature"
 
 
-def test_a_signed_order_naming_a_cell_outside_the_grid_fails_the_step(caplog):
+def test_a_signed_order_naming_a_cell_outside_the_grid_fails_the_step():
     from test_fuzz_readers import INITIALIZE, NONCE, SECRET, _Client
 
     from bille.tools.execute.broker import BrokerURL
