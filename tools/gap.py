@@ -12,6 +12,9 @@ Every method configuration runs on every instance under the same time limit. Per
   the schedule is than the optimum *at most*, whatever the optimum; and ``gap_percent``, the
   exact gap, where some method proved the optimum.
 
+Interrupted (Ctrl-C), the report holds the instances' rows finished so far, measured the same
+way (:class:`Interrupted`).
+
 Method configurations are ``name`` or ``name:option=value,option=value`` (the short names ``H``
 and ``d-tr`` of the command line work too). Methods that do not apply to an instance are listed
 as ``n/a`` with the reason; two exact methods that disagree on an optimum stop the report.
@@ -110,14 +113,32 @@ def known_lower_bound(inst: Instance) -> tuple[int | None, str]:
     return None, ""
 
 
+class Interrupted(Exception):
+    """The user stopped the report: ``rows`` holds the rows finished before (and the stopped
+    method's row where it returned its best so far), certified as usual."""
+
+    def __init__(self, rows: list[dict]) -> None:
+        super().__init__("interrupted")
+        self.rows = rows
+
+
 def run(instances: list[Instance], configs: list[Config], time_limit: float, threads: int = 1, progress=None,
         schedules: dict | None = None, files: dict | None = None) -> list[dict]:
     """One row per instance and configuration, then one per schedule file valid for the instance
     (``files``: label -> Schedule; see :func:`check_files`). ``schedules``, if given, receives every schedule found under
-    ``(instance name, label)``."""
+    ``(instance name, label)``. Raises :class:`Interrupted` on Ctrl-C."""
     rows = []
     for inst in instances:
-        mine = [_solve_row(inst, c, time_limit, threads, progress, schedules) for c in configs]
+        mine = []
+        try:
+            for c in configs:
+                mine.append(_solve_row(inst, c, time_limit, threads, progress, schedules))
+                if mine[-1]["status"] == "interrupted":
+                    raise KeyboardInterrupt
+        except KeyboardInterrupt:
+            if mine:
+                _certify(inst, mine)
+            raise Interrupted(rows + mine) from None
         for label, schedule in (files or {}).items():
             if schedule.num_robots == inst.num_robots and validate(inst, schedule).valid:
                 mine.append(_file_row(inst, label, schedule, schedules))
@@ -163,7 +184,8 @@ def _solve_row(inst, config: Config, time_limit, threads, progress, schedules) -
         return _row(inst, config.label, "n/a", note=str(exc))
     if schedules is not None and result.schedule is not None:
         schedules[inst.name, config.label] = result.schedule
-    note = result.stats.get("failure") or result.stats.get("reason") or ""
+    note = (result.stats.get("failure") or result.stats.get("reason") or result.stats.get("violation")
+            or result.stats.get("contradiction") or "")
     objective = result.stats.get("objective")
     if not note and objective:
         note = f"optimizes: {objective}"
@@ -186,7 +208,9 @@ def _certify(inst: Instance, rows: list[dict]) -> None:
     if len(proved) > 1:  # two exact methods disagree: a bug, never hide it
         raise BilleError(f"{inst.name}: exact methods disagree on the optimal makespan: {sorted(proved)}")
     known, _ = known_lower_bound(inst)
-    lowers = [r["own_lower_bound"] for r in rows if r["own_lower_bound"] is not None] + [known]
+    # a row whose own proofs contradicted its schedule (status error) proves nothing
+    lowers = [r["own_lower_bound"] for r in rows if r["own_lower_bound"] is not None and r["status"] != "error"]
+    lowers.append(known)
     lower = max((v for v in lowers if v is not None), default=None)
     spans = [r["makespan"] for r in rows if r["makespan"] is not None]
     best = min(spans, default=None)

@@ -150,7 +150,7 @@ def gap(instances, methods: tuple[str, ...], schedule_files, time_limit: float, 
 
     from bille.instances import OptionError
 
-    from .gap import check_files, parse_configs, run, summary, table, write_csv
+    from .gap import Interrupted, check_files, parse_configs, run, summary, table, write_csv
 
     try:
         configs = parse_configs(methods)
@@ -169,7 +169,11 @@ def gap(instances, methods: tuple[str, ...], schedule_files, time_limit: float, 
             click.echo(f"  running {method} on {inst} ...", err=True)
 
     schedules: dict = {}
-    rows = run(loaded, configs, time_limit, threads, progress, schedules=schedules, files=files)
+    interrupted = False
+    try:
+        rows = run(loaded, configs, time_limit, threads, progress, schedules=schedules, files=files)
+    except Interrupted as stop:  # what was found is shown and written all the same
+        rows, interrupted = stop.rows, True
     write_csv(rows, Path(csv_path))
     if rrd:
         by_name = {inst.name: inst for inst in loaded}
@@ -177,7 +181,7 @@ def gap(instances, methods: tuple[str, ...], schedule_files, time_limit: float, 
         if traces:
             record_traces(traces, rrd, quiet=as_json)
     if as_json:
-        print_json({"rows": rows, "csv": csv_path})
+        print_json({"rows": rows, "csv": csv_path, "interrupted": interrupted})
     else:
         for line in table(rows):
             click.echo(line)
@@ -185,4 +189,7 @@ def gap(instances, methods: tuple[str, ...], schedule_files, time_limit: float, 
         for line in summary(rows):
             click.echo(line)
         click.echo(f"written to {csv_path}" + (f" and {rrd}" if rrd else ""))
+    if interrupted:
+        click.echo(f"bille gap: interrupted; the {len(rows)} rows finished are shown and written", err=True)
+        return 130
     return EXIT_OK

@@ -8,6 +8,9 @@ import click
 
 from ..common import EXIT_OK, stderr_console
 
+EXIT_INTERRUPTED = 130
+SHIPPED = sorted(p.stem for p in (Path(__file__).resolve().parent / "files").glob("*.yaml"))
+
 
 class _RunByDefault(click.Group):
     """``bille sweep SPEC.yaml`` runs it; ``bille sweep report RESULTS`` reports."""
@@ -24,28 +27,46 @@ def sweep() -> None:
     processes, or a Dask cluster with --scheduler), resumable; bille sweep report RESULTS."""
 
 
-@sweep.command("run")
+@sweep.command("run", help=f"""Run every run of SPEC.yaml (or a sweep shipped with bille: {', '.join(SHIPPED)})
+    not yet recorded in the results folder. Its methods are any of 'bille solve' with their
+    options (e.g. temporal-astar: {{load_transfer: [false, true]}}). Ctrl-C keeps every finished
+    run (exit 130); the same command goes on from there.""")
 @click.argument("spec_file", metavar="SPEC.yaml")
 @click.option("--out", type=click.Path(file_okay=False), help="Results folder (default: sweep-NAME).")
 @click.option("--jobs", "-j", type=click.IntRange(min=1), help="Runs at a time on this machine (default: CPUs).")
 @click.option("--scheduler", metavar="tcp://HOST:PORT", help="Run on this Dask cluster instead.")
 def run_sweep(spec_file: str, out: str | None, jobs: int | None, scheduler: str | None) -> int:
-    """Run every run of SPEC.yaml (or a sweep shipped with bille: small, planners) not yet recorded
-    in the results folder."""
     from .spec import load_spec
 
     spec = load_spec(spec_file)
-    folder, rows = run_spec(spec, out or f"sweep-{spec.name}", jobs=jobs, scheduler=scheduler)
+    folder = Path(out or f"sweep-{spec.name}")
+    try:
+        _, rows = run_spec(spec, folder, jobs=jobs, scheduler=scheduler)
+    except Interrupted as stop:
+        click.echo(f"{spec.name}: interrupted; {len(stop.rows)} of {len(spec.runs)} runs recorded in {folder} "
+                   f"(results.parquet, results.csv, schedules/); the same command goes on from there")
+        return EXIT_INTERRUPTED
     click.echo(f"{spec.name}: {len(rows)} runs recorded in {folder} (results.parquet, results.csv, schedules/)")
     return EXIT_OK
 
 
+class Interrupted(Exception):
+    """A sweep stopped by Ctrl-C: its finished runs are recorded (``rows``), the runs under way
+    were killed."""
+
+    def __init__(self, rows: list[dict]) -> None:
+        super().__init__("interrupted")
+        self.rows = rows
+
+
 def run_spec(spec, out, *, jobs=None, scheduler=None, client=None, quiet=False):
-    """Run the spec's new runs into ``out``; returns the folder and every row recorded."""
+    """Run the spec's new runs into ``out``; returns the folder and every row recorded (measured
+    against the best bounds, :func:`.results.certify`). Raises
+    :class:`Interrupted` on Ctrl-C, once the finished runs are written."""
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
     from .engine import run_dask, run_local
-    from .results import Store
+    from .results import Store, certify
 
     store = Store(out)
     todo = [r for r in spec.runs if r.key not in store.keys]
@@ -63,20 +84,24 @@ def run_spec(spec, out, *, jobs=None, scheduler=None, client=None, quiet=False):
             failed += row["status"] == "failed"
             bar.update(task, advance=1, failed=failed)
 
-        if client is not None or scheduler:
-            from distributed import Client
+        try:
+            if client is not None or scheduler:
+                from distributed import Client
 
-            own = client is None
-            client = client or Client(scheduler, timeout="10s")
-            try:
-                run_dask(todo, spec.time_limit, spec.memory_limit, client, on_row)
-            finally:
-                if own:
-                    client.close()
-        else:
-            run_local(todo, spec.time_limit, spec.memory_limit, jobs or os.cpu_count() or 1, on_row)
+                own = client is None
+                client = client or Client(scheduler, timeout="10s")
+                try:
+                    run_dask(todo, spec.time_limit, spec.memory_limit, client, on_row)
+                finally:
+                    if own:
+                        client.close()
+            else:
+                run_local(todo, spec.time_limit, spec.memory_limit, jobs or os.cpu_count() or 1, on_row)
+        except KeyboardInterrupt:
+            store.finish()
+            raise Interrupted(certify(store.rows)) from None
     store.finish()
-    return Path(out), store.rows
+    return Path(out), certify(store.rows)
 
 
 @sweep.command("report")

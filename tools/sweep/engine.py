@@ -9,6 +9,12 @@ run's memory: the limit is on top of what the child has mapped when it starts), 
 died: a signal or an exit code, with the last words it wrote to stderr, e.g. a C++ library's
 ``std::bad_alloc`` at the memory limit), ``killed`` (no answer 30 s after its time limit),
 ``error`` (an exception, with its message).
+
+A run may start processes of its own (``anytime`` forks its bound search, CP-SAT starts
+threads): its child is not a daemon, leads a process group of its own, and is killed with that
+group when its time is up or the sweep is stopped (Ctrl-C reaches the sweep alone, which kills
+the runs under way and keeps the finished ones). A child whose sweep died without killing it
+(``kill -9``) sees its parent gone within a second and ends its group itself.
 """
 from __future__ import annotations
 
@@ -17,15 +23,19 @@ import json
 import multiprocessing
 import os
 import platform
+import signal
 import sys
 import tempfile
+import threading
 import time
+import uuid
 from concurrent.futures import ThreadPoolExecutor, as_completed
 from importlib.metadata import version
 
 from .spec import Run
 
 GRACE_S = 30.0  # a run that does not answer this long after its time limit is killed
+POLL_S = 0.2  # how often a waiting run looks whether the sweep was stopped
 _CONTEXT = None
 
 
@@ -60,45 +70,65 @@ def describe(run: Run) -> dict:
                 method=run.method, options=run.options_json, label=run.label)
 
 
-def execute(run: Run, time_limit: float, memory_limit: int | None, target=None) -> dict:
-    """Run ``run`` in a child process and return its row (see the module docstring)."""
-    row = dict(describe(run), status=None, makespan=None, tiles_traveled=None, lower_bound=None,
-               certified_gap=None, time_s=None, expansions=None, stats=None, error=None, schedule=None,
-               **versions())
+def execute(run: Run, time_limit: float, memory_limit: int | None, target=None, stop=None) -> dict | None:
+    """Run ``run`` in a child process and return its row (see the module docstring); None if
+    ``stop()`` turned true first (the run was killed: it did not finish, so it has no row)."""
+    row = dict(describe(run), status=None, makespan=None, tiles_traveled=None, lower_bound=None, time_s=None,
+               expansions=None, stats=None, error=None, schedule=None, **versions())
     ctx = _context()
     inbox, outbox = ctx.Pipe(duplex=False)
     errors = tempfile.NamedTemporaryFile("w+", suffix=".stderr", delete=False)
     errors.close()
     child = ctx.Process(target=_child, args=(target or solve_in_child, errors.name, outbox, run.text, run.method,
-                                             dict(run.options), time_limit, memory_limit), daemon=True)
+                                             dict(run.options), time_limit, memory_limit), daemon=False)
     began = time.perf_counter()
     _start(child)
     outbox.close()
     limit = dict(run.options).get("time_limit", time_limit) + GRACE_S
-    answer = None
+    answer, stopped = None, False
     try:
-        if inbox.poll(limit):
-            answer = inbox.recv()
-    except EOFError:
+        while (left := began + limit - time.perf_counter()) > 0:
+            if inbox.poll(min(POLL_S, left)):
+                answer = inbox.recv()
+                break
+            if stop is not None and stop():
+                stopped = True
+                break
+    except EOFError:  # the child died without a word
         answer = None
     finally:
-        if child.is_alive() and answer is None:
-            child.kill()
+        if answer is None:
+            _kill(child)
         child.join(5)
+        if child.is_alive():
+            _kill(child)
+            child.join()
         inbox.close()
+    said = _last_line(errors.name)
+    os.unlink(errors.name)
+    if stopped:
+        return None
     if answer is None:
         code = child.exitcode
         if time.perf_counter() - began >= limit:
             row.update(status="failed", error=f"killed: no answer {GRACE_S:g} s after the time limit")
         else:
             how = f"signal {-code}" if code is not None and code < 0 else f"exit code {code}"
-            said = _last_line(errors.name)
             row.update(status="failed", error=f"crashed ({how})" + (f": {said}" if said else ""))
         row["time_s"] = round(time.perf_counter() - began, 3)
     else:
         row.update(answer)
-    os.unlink(errors.name)
     return row
+
+
+def _kill(child) -> None:
+    """Kill the run with every process it started (its process group)."""
+    try:
+        os.killpg(child.pid, signal.SIGKILL)
+    except (ProcessLookupError, PermissionError):  # not yet a group of its own, or gone
+        pass
+    if child.is_alive():
+        child.kill()
 
 
 def _last_line(path: str) -> str:
@@ -113,11 +143,24 @@ def _last_line(path: str) -> str:
 
 
 def _child(target, errors_path, *args) -> None:
-    """The child's stderr goes to a file the parent reads if the child crashes."""
+    """The child leads a process group of its own (what it starts is killed with it, and a
+    terminal's Ctrl-C reaches the sweep, not the runs), watches its parent, and writes its
+    stderr to a file the parent reads if the child crashes."""
+    os.setpgid(0, 0)
+    parent = os.getppid()
+    threading.Thread(target=_orphaned, args=(parent,), daemon=True, name="bille-watch-parent").start()
     fd = os.open(errors_path, os.O_WRONLY)
     os.dup2(fd, 2)
     os.close(fd)
     target(*args)
+
+
+def _orphaned(parent: int) -> None:
+    """End the run's process group once its parent (the fork server, which ends with the sweep)
+    is gone: a sweep killed outright leaves no run behind."""
+    while os.getppid() == parent:
+        time.sleep(1.0)
+    os.killpg(0, signal.SIGKILL)
 
 
 def _start(child) -> None:
@@ -152,21 +195,23 @@ def solve_in_child(outbox, text: str, method: str, options: dict, time_limit: fl
         size = mapped() + memory_limit * 1024 * 1024
         resource.setrlimit(resource.RLIMIT_AS, (size, size))
     try:
-        from bille.instances import instance_from_text
+        from bille.instances import OptionError, instance_from_text
         from bille.solvers import dump_schedule, solve
 
         inst = instance_from_text(text)
         options = {"time_limit": time_limit, **options}
-        result = solve(inst, method, bound=True, **options)
-        m, lower = result.metrics, result.lower_bound
-        gap = None
-        if m is not None and lower:
-            gap = round((m.makespan - lower) / lower, 6)
+        try:
+            result = solve(inst, method, bound=True, **options)
+        except OptionError as exc:  # the method does not apply to this instance: a row, not a failure
+            outbox.send(dict(status="n/a", error=str(exc)))
+            return
+        m = result.metrics
         stats = {k: v for k, v in result.stats.items() if isinstance(v, (int, float, str, bool)) or v is None}
         expansions = next((int(result.stats[k]) for k in ("expansions", "nodes", "states")
                            if isinstance(result.stats.get(k), (int, float))), None)
-        outbox.send(dict(status=result.status, makespan=m.makespan if m else None,
-                         tiles_traveled=m.tiles_traveled if m else None, lower_bound=lower, certified_gap=gap,
+        said = result.stats.get("violation") or result.stats.get("contradiction") if result.status == "error" else None
+        outbox.send(dict(status=result.status, error=said, makespan=m.makespan if m else None,
+                         tiles_traveled=m.tiles_traveled if m else None, lower_bound=result.lower_bound,
                          time_s=round(result.time_s, 4), expansions=expansions, stats=json.dumps(stats, sort_keys=True),
                          schedule=None if result.schedule is None else dump_schedule(result.schedule)))
     except MemoryError:
@@ -178,23 +223,64 @@ def solve_in_child(outbox, text: str, method: str, options: dict, time_limit: fl
 
 
 def run_local(runs: list[Run], time_limit: float, memory_limit, jobs: int, on_row) -> None:
-    """The runs on ``jobs`` worker threads, each run in its own child process."""
-    with ThreadPoolExecutor(max_workers=jobs) as pool:
-        futures = [pool.submit(execute, r, time_limit, memory_limit) for r in runs]
+    """The runs on ``jobs`` worker threads, each run in its own child process. Interrupted
+    (Ctrl-C), the runs under way are killed; every run finished before is handed to ``on_row``."""
+    stop = threading.Event()
+    pool = ThreadPoolExecutor(max_workers=jobs)
+    futures = [pool.submit(execute, r, time_limit, memory_limit, stop=stop.is_set) for r in runs]
+    handed = set()
+    try:
         for fut in as_completed(futures):
+            handed.add(fut)
+            on_row(fut.result())
+    finally:
+        stop.set()
+        pool.shutdown(wait=True, cancel_futures=True)
+    for fut in futures:  # finished while the sweep was being stopped
+        if fut not in handed and fut.done() and not fut.cancelled() and fut.exception() is None \
+                and fut.result() is not None:
             on_row(fut.result())
 
 
+class _DaskStop:
+    """``stop()`` for a run on a Dask worker: whether the sweep set its stop event (looked up
+    at most once a second)."""
+
+    def __init__(self, name: str) -> None:
+        self.name, self.when, self.stopped = name, 0.0, False
+
+    def __call__(self) -> bool:
+        if not self.stopped and time.monotonic() - self.when >= 1.0:
+            from distributed import Event
+
+            self.when = time.monotonic()
+            try:
+                self.stopped = Event(self.name).is_set()
+            except Exception:  # noqa: BLE001 - no scheduler to ask: the run goes on to its limit
+                self.stopped = False
+        return self.stopped
+
+
 def run_dask(runs: list[Run], time_limit: float, memory_limit, client, on_row) -> None:
-    """The runs as tasks of a Dask cluster (``client``), each in a child process on its worker."""
+    """The runs as tasks of a Dask cluster (``client``), each in a child process on its worker.
+    Interrupted, the sweep's stop event tells the runs under way to end, and the rest are
+    cancelled."""
+    from distributed import Event
     from distributed import as_completed as dask_completed
 
-    futures = client.map(execute, runs, time_limit=time_limit, memory_limit=memory_limit, pure=False)
+    event = Event(f"bille-sweep-stop-{uuid.uuid4().hex}", client=client)
+    futures = client.map(execute, runs, time_limit=time_limit, memory_limit=memory_limit, stop=_DaskStop(event.name),
+                         pure=False)
     run_of = {fut.key: run for fut, run in zip(futures, runs)}
-    for fut in dask_completed(futures):
-        try:
-            row = fut.result()
-        except Exception as exc:  # noqa: BLE001 - a lost worker (KilledWorker) is a row too
-            row = dict(describe(run_of[fut.key]), status="failed", error=f"worker lost: {type(exc).__name__}: {exc}",
-                       **versions())
-        on_row(row)
+    try:
+        for fut in dask_completed(futures):
+            try:
+                row = fut.result()
+            except Exception as exc:  # noqa: BLE001 - a lost worker (KilledWorker) is a row too
+                row = dict(describe(run_of[fut.key]), status="failed",
+                           error=f"worker lost: {type(exc).__name__}: {exc}", **versions())
+            if row is not None:
+                on_row(row)
+    finally:
+        event.set()
+        client.cancel([f for f in futures if not f.done()])

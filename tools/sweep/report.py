@@ -1,6 +1,11 @@
 """``bille sweep report RESULTS``: per method configuration, success rate, certified gaps and
-times, and the plots people expect (PNG): success rate against the number of robots, a cactus
-plot of solve times, the distribution of certified gaps."""
+times; why runs failed (each kind of error once, with its count and its first run); and the
+plots people expect (PNG): success rate against the number of robots, a cactus plot of solve
+times, the distribution of certified gaps.
+
+A run that does not apply (its method cannot plan that instance: ``n/a``) is counted apart and
+left out of the success rate; a run that ``failed`` (crashed, killed, out of memory, an
+exception) or ended in ``error`` (its schedule or proofs contradicted) is a failure."""
 from __future__ import annotations
 
 import statistics
@@ -9,23 +14,67 @@ from pathlib import Path
 from ..tables import text_table
 
 
+FAILED = ("failed", "error")
+
+
 def solved(row: dict) -> bool:
-    return row.get("makespan") is not None
+    return row.get("makespan") is not None and row.get("status") not in FAILED
 
 
 def summary(rows: list[dict]) -> list[str]:
+    """The table per method configuration, then why runs failed and any contradiction."""
+    from .results import contradictions
+
     body = []
     for label in dict.fromkeys(r["label"] for r in rows):
         mine = [r for r in rows if r["label"] == label]
-        ok = [r for r in mine if solved(r)]
+        applies = [r for r in mine if r["status"] != "n/a"]
+        ok = [r for r in applies if solved(r)]
         gaps = [100.0 * r["certified_gap"] for r in ok if r.get("certified_gap") is not None]
         times = [r["time_s"] for r in ok if r.get("time_s") is not None]
-        failed = sum(r["status"] == "failed" for r in mine)
-        body.append([label, len(mine), f"{100.0 * len(ok) / len(mine):.0f}%", failed,
+        failed = sum(r["status"] in FAILED for r in mine)
+        body.append([label, len(mine), len(mine) - len(applies),
+                     f"{100.0 * len(ok) / len(applies):.0f}%" if applies else None, failed,
                      f"{statistics.median(gaps):.1f}%" if gaps else None, f"{max(gaps):.1f}%" if gaps else None,
                      f"{statistics.median(times):.3f}" if times else None])
-    return text_table(["method", "runs", "success", "failed", "median gap", "worst gap", "median time [s]"], body,
-                      right={"runs", "success", "failed", "median gap", "worst gap", "median time [s]"})
+    right = {"runs", "n/a", "success", "failed", "median gap", "worst gap", "median time [s]"}
+    out = text_table(["method", "runs", "n/a", "success", "failed", "median gap", "worst gap", "median time [s]"],
+                     body, right=right)
+    reasons = why(rows)
+    if reasons:
+        out += ["", "why runs failed or did not apply (each kind of error once, with its count and its first run):"]
+        out += [f"  {n} x {_short(first['error'] or 'status ' + first['status'])} (first: {first['label']} on "
+                f"{first['instance']})" for n, first in reasons.values()]
+    out += [f"contradiction: {line}" for line in contradictions(rows)]
+    return out
+
+
+def _short(text: str) -> str:
+    return text if len(text) <= 160 else text[:157] + "..."
+
+
+def kind_of(row: dict) -> str:
+    """An error's kind: ``error: ValueError``, ``crashed (signal 9)``, ``memory limit``, ``n/a``..."""
+    if row["status"] == "n/a":
+        return "n/a"
+    text = row.get("error") or f"status {row['status']}"
+    if row["status"] == "error":
+        return "status error"
+    head, _, rest = text.partition(": ")
+    if head in ("error", "worker lost") and rest:
+        return f"{head}: {rest.partition(':')[0]}"
+    return head
+
+
+def why(rows: list[dict]) -> dict[str, tuple[int, dict]]:
+    """Failed and inapplicable runs by kind of error: how many, and the first of them."""
+    out: dict[str, tuple[int, dict]] = {}
+    for r in rows:
+        if r["status"] in FAILED or r["status"] == "n/a":
+            kind = kind_of(r)
+            n, first = out.get(kind, (0, r))
+            out[kind] = (n + 1, first)
+    return out
 
 
 def plots(rows: list[dict], folder: Path) -> list[Path]:
@@ -33,6 +82,7 @@ def plots(rows: list[dict], folder: Path) -> list[Path]:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.ticker import MaxNLocator
 
     labels = list(dict.fromkeys(r["label"] for r in rows))
     out = []
@@ -40,11 +90,12 @@ def plots(rows: list[dict], folder: Path) -> list[Path]:
     for label in labels:
         by = {}
         for r in rows:
-            if r["label"] == label:
+            if r["label"] == label and r["status"] != "n/a":
                 by.setdefault(r["robots"], []).append(solved(r))
         xs = sorted(by)
         ax.plot(xs, [100.0 * sum(by[x]) / len(by[x]) for x in xs], marker="o", label=label)
     ax.set(xlabel="robots", ylabel="success [%]", ylim=(-5, 105), title="success rate against robots")
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))  # robots come whole
     ax.legend(fontsize=7)
     out.append(_save(fig, folder / "success.png"))
     fig, ax = plt.subplots(figsize=(7, 4))

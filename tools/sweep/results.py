@@ -2,6 +2,12 @@
 finish, so a sweep stopped or crashed midway loses no finished run), the schedules beside it
 (``schedules/HASH-METHOD-N.yaml``), and the table as Parquet and CSV (``results.parquet``,
 ``results.csv``, rows sorted by run key) written when the sweep ends.
+
+``lower_bound`` is the bound a run proved itself; ``best_lower_bound`` the best bound proved on
+the same instance by any run of the sweep (a proved optimum is a bound), and ``certified_gap`` =
+(makespan - best_lower_bound) / best_lower_bound: every run is measured against the same bound.
+The runs' own file (``runs.jsonl``) holds what each run found; the two cross-run columns are
+computed when the table is written or read.
 """
 from __future__ import annotations
 
@@ -12,9 +18,11 @@ from pathlib import Path
 from bille.instances import BilleError
 
 COLUMNS = ["key", "instance", "instance_hash", "width", "height", "robots", "tiles", "moved", "method", "options",
-           "label", "status", "makespan", "tiles_traveled", "lower_bound", "certified_gap", "time_s", "expansions",
+           "label", "status", "makespan", "tiles_traveled", "lower_bound", "best_lower_bound", "certified_gap", "time_s",
+           "expansions",
            "stats", "error", "schedule", "bille_version", "python_version"]
 TIMING = ("time_s", "stats")  # the columns that differ from one run of a sweep to the next
+TRUSTED = ("optimal", "feasible", "infeasible", "timeout", "unsolved")  # statuses whose bound is a proof
 
 
 class Store:
@@ -34,7 +42,7 @@ class Store:
             name = f"{hashlib.sha256(row['key'].encode()).hexdigest()[:16]}.yaml"
             (self.folder / "schedules" / name).write_text(text, encoding="utf-8")
             row = dict(row, schedule=f"schedules/{name}")
-        line = json.dumps({c: row.get(c) for c in COLUMNS}) + "\n"
+        line = json.dumps({c: row.get(c) for c in COLUMNS if c not in ("best_lower_bound", "certified_gap")}) + "\n"
         with open(self.path, "a", encoding="utf-8") as f:  # one write per line: a killed sweep keeps it
             f.write(line)
         self.rows.append(json.loads(line))
@@ -71,7 +79,7 @@ def write_tables(rows: list[dict], folder: Path) -> tuple[Path, Path]:
     import pyarrow.csv as pacsv
     import pyarrow.parquet as pq
 
-    ordered = sorted(rows, key=lambda r: r["key"])
+    ordered = sorted(certify(rows), key=lambda r: r["key"])
     table = pa.Table.from_pylist([{c: r.get(c) for c in COLUMNS} for r in ordered], schema=_schema())
     parquet, csv = folder / "results.parquet", folder / "results.csv"
     pq.write_table(table, parquet)
@@ -79,21 +87,63 @@ def write_tables(rows: list[dict], folder: Path) -> tuple[Path, Path]:
     return parquet, csv
 
 
+def best_bounds(rows: list[dict]) -> dict[str, int]:
+    """Per instance (by hash): the best lower bound on the makespan that a run of the sweep
+    proved (its own ``lower_bound``; runs that failed or contradicted themselves prove nothing)."""
+    best: dict[str, int] = {}
+    for r in rows:
+        if r.get("status") in TRUSTED and r.get("lower_bound") is not None:
+            best[r["instance_hash"]] = max(best.get(r["instance_hash"], 0), r["lower_bound"])
+    return best
+
+
+def certify(rows: list[dict]) -> list[dict]:
+    """The rows with ``best_lower_bound`` and ``certified_gap`` (module docstring); no gap where
+    the best bound is above the run's makespan (a contradiction between two runs, which
+    :func:`contradictions` names)."""
+    best = best_bounds(rows)
+    out = []
+    for r in rows:
+        lower = best.get(r["instance_hash"])
+        gap = None
+        if r.get("makespan") is not None and lower and lower <= r["makespan"]:
+            gap = round((r["makespan"] - lower) / lower, 6)
+        out.append(dict(r, best_lower_bound=lower, certified_gap=gap))
+    return out
+
+
+def contradictions(rows: list[dict]) -> list[str]:
+    """A bound proved by one run above a valid schedule of another, on the same instance: a bug
+    in one of them, never hidden."""
+    best = best_bounds(rows)
+    said = []
+    for r in rows:
+        lower = best.get(r["instance_hash"])
+        if r.get("makespan") is not None and lower is not None and lower > r["makespan"]:
+            by = next(o["label"] for o in rows if o["instance_hash"] == r["instance_hash"]
+                      and o.get("status") in TRUSTED and o.get("lower_bound") == lower)
+            said.append(f"{r['instance']}: {by} proved a lower bound of {lower}, above the valid schedule of "
+                        f"{r['makespan']} steps of {r['label']}")
+    return said
+
+
 def _schema():
     import pyarrow as pa
 
-    ints = {"width", "height", "robots", "tiles", "moved", "makespan", "tiles_traveled", "lower_bound", "expansions"}
+    ints = {"width", "height", "robots", "tiles", "moved", "makespan", "tiles_traveled", "lower_bound",
+            "best_lower_bound", "expansions"}
     floats = {"certified_gap", "time_s"}
     return pa.schema([(c, pa.int64() if c in ints else pa.float64() if c in floats else pa.string()) for c in COLUMNS])
 
 
 def load_table(folder: str | Path) -> list[dict]:
-    """The rows of a results folder (its Parquet table, else its runs so far)."""
+    """The rows of a results folder (its Parquet table, else its runs so far), each measured
+    against the best bound of its instance (:func:`certify`)."""
     folder = Path(folder)
     if (folder / "results.parquet").exists():
         import pyarrow.parquet as pq
 
-        return pq.read_table(folder / "results.parquet").to_pylist()
+        return certify(pq.read_table(folder / "results.parquet").to_pylist())
     if (folder / "runs.jsonl").exists():
-        return read_rows(folder / "runs.jsonl")
+        return certify(read_rows(folder / "runs.jsonl"))
     raise BilleError(f"{folder}: no sweep results here (expected results.parquet or runs.jsonl)")
