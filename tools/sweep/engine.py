@@ -44,7 +44,7 @@ def _context():
     if _CONTEXT is None:
         try:
             _CONTEXT = multiprocessing.get_context("forkserver")
-            _CONTEXT.set_forkserver_preload(["bille.solvers", "bille.tools.sweep.engine"])
+            _CONTEXT.set_forkserver_preload(["bille.tools.sweep.warm", "bille.tools.sweep.engine"])
         except ValueError:  # no fork server on this platform
             _CONTEXT = multiprocessing.get_context("spawn")
     return _CONTEXT
@@ -190,7 +190,9 @@ def solve_in_child(outbox, text: str, method: str, options: dict, time_limit: fl
     import resource
 
     from bille.instances.limits import mapped
+    from bille.solvers import METHODS
 
+    METHODS[method]  # its module and libraries loaded before the limit (the fork server has them already)
     if memory_limit:  # on top of what the child has mapped already (bille and its libraries)
         size = mapped() + memory_limit * 1024 * 1024
         resource.setrlimit(resource.RLIMIT_AS, (size, size))

@@ -18,9 +18,8 @@ from pathlib import Path
 from bille.instances import BilleError
 
 COLUMNS = ["key", "instance", "instance_hash", "width", "height", "robots", "tiles", "moved", "method", "options",
-           "label", "status", "makespan", "tiles_traveled", "lower_bound", "best_lower_bound", "certified_gap", "time_s",
-           "expansions",
-           "stats", "error", "schedule", "bille_version", "python_version"]
+           "label", "status", "makespan", "tiles_traveled", "lower_bound", "best_lower_bound", "certified_gap",
+           "time_s", "expansions", "stats", "error", "schedule", "bille_version", "python_version"]
 TIMING = ("time_s", "stats")  # the columns that differ from one run of a sweep to the next
 TRUSTED = ("optimal", "feasible", "infeasible", "timeout", "unsolved")  # statuses whose bound is a proof
 
