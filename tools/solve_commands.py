@@ -6,8 +6,8 @@ import yaml
 
 from bille.solvers import METHODS, save_schedule, solve
 
-from .common import (EXIT_NO, EXIT_OK, LiveLine, exit_code, instance_arg, label_of, print_json, record_traces,
-                     schedule_arg, summary_line, trace_of, writable)
+from .common import (EXIT_INTERRUPTED, EXIT_NO, EXIT_OK, LiveLine, exit_code, instance_arg, label_of, print_json,
+                     record_traces, schedule_arg, summary_line, trace_of, writable)
 
 
 @click.command("solve")
@@ -191,5 +191,5 @@ def gap(instances, methods: tuple[str, ...], schedule_files, time_limit: float, 
         click.echo(f"written to {csv_path}" + (f" and {rrd}" if rrd else ""))
     if interrupted:
         click.echo(f"bille gap: interrupted; the {len(rows)} rows finished are shown and written", err=True)
-        return 130
+        return EXIT_INTERRUPTED
     return EXIT_OK

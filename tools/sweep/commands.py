@@ -6,9 +6,8 @@ from pathlib import Path
 
 import click
 
-from ..common import EXIT_OK, stderr_console
+from ..common import EXIT_INTERRUPTED, EXIT_OK, stderr_console
 
-EXIT_INTERRUPTED = 130
 SHIPPED = sorted(p.stem for p in (Path(__file__).resolve().parent / "files").glob("*.yaml"))
 
 
