@@ -457,7 +457,7 @@ def test_the_command_line_runs_and_resumes_a_stopped_run(tmp_path):
     summary = json.loads(out.stdout)
     assert summary["status"] == "completed" and summary["worlds_match_goal"] and summary["steps_per_second"] > 0
     again = bille("run", "--resume", "j.jsonl", cwd=tmp_path)
-    assert again.returncode == 2 and "the run is complete" in again.stderr
+    assert again.returncode == 0 and "is finished (all 74 steps); nothing to resume" in again.stdout
 
 
 def test_the_documented_messages_validate_and_their_signatures_verify():
