@@ -114,23 +114,28 @@ class Windows:
 
 
 def _shortest_sat(model, sub: Instance, L: int, until: float, solver: str):
-    """The window's shortest part with a python-sat solver: ``done[L]`` assumed, then ``done[k -
-    1]`` while ``done[k]`` is satisfiable. Returns ``(k, part, roles, shortest)`` for the shortest
-    part found (``shortest``: none has fewer steps, ``done[k - 1]`` was refuted), else ``unsat``
-    or ``unknown``."""
+    """The window's shortest part with a python-sat solver: ``done[L]`` assumed, then, while a
+    part of ``k`` steps is found (its first ``k`` steps: the smallest ``k`` with ``done[k]``),
+    ``done[k - 1]``. Returns ``(k, part, roles, shortest)`` for the shortest part found
+    (``shortest``: none has fewer steps: ``done[k - 1]`` was refuted, or ``k`` is 1), else
+    ``unsat`` or ``unknown``."""
     backend = SatBackend(model, solver)
     try:
         status = solve_with_cuts(backend, model, sub, [model.done[L]], until)
         if status != SAT:
             return status
-        k = L
-        found = _part(model, sub, backend, k)
-        while k > 1 and (status := solve_with_cuts(backend, model, sub, [model.done[k - 1]], until)) == SAT:
-            k -= 1
-            found = _part(model, sub, backend, k)
-        return found + (status == UNSAT,)
+        found = _part(model, sub, backend, _length(model, backend, L))
+        while found[0] > 1 and (status := solve_with_cuts(backend, model, sub, [model.done[found[0] - 1]],
+                                                          until)) == SAT:
+            found = _part(model, sub, backend, _length(model, backend, L))
+        return found + (status == UNSAT or found[0] == 1,)
     finally:
         backend.delete()
+
+
+def _length(model, backend, L: int) -> int:
+    """The number of steps of the backend's solution: the smallest ``k`` with ``done[k]``."""
+    return next(k for k in range(1, L + 1) if backend.value(model.done[k]))
 
 
 def _shortest_cpsat(model, sub: Instance, L: int, until: float):
@@ -144,8 +149,7 @@ def _shortest_cpsat(model, sub: Instance, L: int, until: float):
                            maximize=True)
     if backend.values is None:
         return status
-    k = next(k for k in range(1, L + 1) if backend.value(model.done[k]))
-    return _part(model, sub, backend, k) + (status == SAT,)
+    return _part(model, sub, backend, _length(model, backend, L)) + (status == SAT,)
 
 
 def _part(model, sub: Instance, backend, k: int):

@@ -12,7 +12,7 @@ from bille.instances.moveset import Kind
 from bille.instances.schedule import Schedule, bind, save_schedule
 from bille.solvers import anytime, solve, validate
 from bille.solvers.bfs import plan as bfs
-from helpers import make
+from helpers import make, sched
 from tinyworlds import tiny_instances
 
 OPTIMA = {}
@@ -88,6 +88,19 @@ def test_the_whole_schedules_window_proves_the_shortest_schedule_it_finds(monkey
     assert validate(inst, result.schedule).valid
     assert result.stats["windows"]["tried"] == 1 and result.stats["windows"]["shortened"] == 1
     assert result.stats["windows"]["proved_bound"] == OPTIMA[inst]
+
+
+@pytest.mark.parametrize("solver", ["minisat22", "cpsat"])
+def test_a_whole_window_shortened_to_one_step_proves_it(monkeypatch, solver):
+    """A part of one step is the shortest there is: the window over the whole schedule proves
+    the bound 1 with either kind of solver."""
+    monkeypatch.setattr(anytime._Rise, "step", lambda self, until: None)
+    inst = make("TTT", [{"at": [0, 0]}], moveset="point", robot_goals=[[1, 0]])
+    late = sched("wait east")
+    result = solve(inst, "anytime", time_limit=30, parallel=False, incumbent=late, solver=solver, window=64)
+    assert result.status == "optimal" and result.metrics.makespan == result.lower_bound == 1
+    assert validate(inst, result.schedule).valid
+    assert result.stats["windows"]["proved_bound"] == 1
 
 
 @pytest.mark.slow
