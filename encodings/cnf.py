@@ -1,8 +1,12 @@
 """The model as CNF for python-sat: clauses as they are, cardinality groups through pysat's
-encodings, solved incrementally with assumptions (``done[k]`` for the makespan, a totalizer for
-tiles traveled). Solving runs in conflict budgets and checks the clock between them; the solvers
-that can be interrupted (all but CaDiCaL) are also interrupted at the deadline by a timer, since
-one budget can take seconds on a large model (under an address-space limit that leaves less than
+encodings, solved incrementally with assumptions (``done[k]`` for the makespan). An objective is
+minimized by a descent: each assignment found, the next call asks for a lower cost (a totalizer
+over the objective's variables, or one literal of a chain), until a call is refuted (the last
+assignment is optimal) or time runs out.
+
+Solving runs in conflict budgets and checks the clock between them; the solvers that can be
+interrupted (all but CaDiCaL) are also interrupted at the deadline by a timer, since one budget
+can take seconds on a large model (under an address-space limit that leaves less than
 ``THREAD_ROOM``, the budgets alone)."""
 from __future__ import annotations
 
@@ -15,6 +19,8 @@ from pysat.solvers import Solver
 from bille.instances.limits import address_room
 
 from . import SAT, UNKNOWN, UNSAT
+from .backend import SAT_SOLVERS as SOLVERS
+from .backend import Backend, Objective, Outcome
 from .model import Model
 
 BUDGET = 2_000  # conflicts per call between clock checks
@@ -22,16 +28,14 @@ BUDGET = 2_000  # conflicts per call between clock checks
 # with less room under an address-space limit, starting one can fail, or hang in
 # ``Thread.start`` when the new thread dies before it says it has started
 THREAD_ROOM = 1 << 30
-# python-sat's incremental solvers that take assumptions and conflict budgets
-SOLVERS = ("cadical195", "cadical153", "cadical103", "glucose42", "glucose4", "glucose3", "gluecard4",
-           "gluecard3", "maplechrono", "maplecm", "maplesat", "mergesat3", "minicard", "minisat22")
 
 
-class SatBackend:
-    """Solve a :class:`~.model.Model` with a SAT solver of python-sat (default CaDiCaL 1.9.5)."""
+class SatBackend(Backend):
+    """Solve a :class:`~.model.Model` with a SAT solver of python-sat (:data:`SOLVERS`; default
+    CaDiCaL 1.9.5), a :class:`~.backend.Backend`."""
 
-    def __init__(self, model: Model, solver: str = "cadical195") -> None:
-        self.model = model
+    def __init__(self, model: Model, cuts=None, solver: str = "cadical195") -> None:
+        super().__init__(model, cuts)
         self.top = model.num_vars
         self.solver = Solver(name=solver)
         self.interruptible = not solver.startswith("cadical")
@@ -41,9 +45,8 @@ class SatBackend:
             self._card(group, exactly=True)
         for group in model.at_most_one:
             self._card(group, exactly=False)
-        self.values: list[int] | None = None
-        self.totalizer: ITotalizer | None = None
-        self.stats = {"conflicts": 0, "solves": 0, "solve_s": 0.0}
+        self._totalizers: dict[tuple, ITotalizer] = {}
+        self._stopped = False
 
     def _card(self, lits: list[int], exactly: bool) -> None:
         if len(lits) <= 6:  # pairwise is smallest here
@@ -61,22 +64,56 @@ class SatBackend:
         self.solver.append_formula(clauses)
         self.num_clauses += len(clauses)
 
-    def at_most(self, lits: list[int], bound: int) -> int:
-        """An assumption literal meaning "at most ``bound`` of ``lits`` are true".
+    def size(self) -> dict:
+        return {"variables": self.top, "clauses": self.num_clauses}
 
-        A totalizer over ``lits`` is built on first use, counting up to ``bound + 1`` only (its
-        size grows with that count), so later calls must ask for smaller bounds."""
-        if self.totalizer is None:
-            self.totalizer = ITotalizer(lits=lits, ubound=bound + 1, top_id=self.top)
-            self.top = self.totalizer.top_id
-            self.add_clauses(self.totalizer.cnf.clauses)
-        return -self.totalizer.rhs[bound]
+    def stop(self) -> None:
+        self._stopped = True
 
-    def solve(self, assumptions: list[int], deadline: float | None) -> str:
+    def close(self) -> None:
+        self.solver.delete()
+
+    def solve(self, assumptions=(), deadline=None, objective=None, hint=None) -> Outcome:
+        """:meth:`.Backend.solve`; an objective by the descent of the module docstring, from
+        ``hint`` if given (it must be an assignment of this model under ``assumptions``)."""
+        if objective is None:
+            return super().solve(assumptions, deadline)
+        best = None if hint is None else Outcome(SAT, list(hint))
+        limit, cuts = objective.at_most, 0
+        while True:
+            if best is not None:
+                cost = objective.cost(best.value)
+                if cost == 0:
+                    return Outcome(SAT, best.values, cuts)
+                limit = cost - 1
+            bound = [] if limit is None else self._bound(objective, limit)
+            step = super().solve([*assumptions, *bound], deadline)
+            cuts += step.cuts
+            if step.status != SAT:
+                status = SAT if step.status == UNSAT and best is not None else step.status
+                return Outcome(status, None if best is None else best.values, cuts)
+            best = step
+
+    def _bound(self, objective: Objective, cost: int) -> list[int]:
+        """Assumption literals meaning "cost at most ``cost``". Off a chain, one literal of a
+        totalizer over the objective's literals, built on first use and counting up to ``cost + 1``
+        only (its size grows with that count): later bounds of one objective must be lower."""
+        if objective.chain:
+            return objective.chain_bound(cost)
+        lits = tuple(-v for v in objective.lits) if objective.maximize else tuple(objective.lits)
+        totalizer = self._totalizers.get(lits)
+        if totalizer is None:
+            totalizer = ITotalizer(lits=list(lits), ubound=cost + 1, top_id=self.top)
+            self._totalizers[lits] = totalizer
+            self.top = totalizer.top_id
+            self.add_clauses(totalizer.cnf.clauses)
+        return [-totalizer.rhs[cost]]
+
+    def _solve(self, assumptions, deadline, objective, hint) -> Outcome:
         start = time.perf_counter()
         self.stats["solves"] += 1
-        if deadline is not None and start > deadline:
-            return UNKNOWN
+        if self._stopped or (deadline is not None and start > deadline):
+            return Outcome(UNKNOWN)
         timer = None
         if deadline is not None and self.interruptible and address_room() >= THREAD_ROOM:
             timer = threading.Timer(deadline - start, self.solver.interrupt)
@@ -88,13 +125,11 @@ class SatBackend:
                 result = self.solver.solve_limited(assumptions=assumptions, expect_interrupt=timer is not None)
                 self.stats["conflicts"] += self.solver.accum_stats().get("conflicts", 0) - before
                 if result is True:
-                    self.values = self.solver.get_model()
-                    return SAT
+                    return Outcome(SAT, self.solver.get_model())
                 if result is False:
-                    self.values = None
-                    return UNSAT
-                if deadline is not None and time.perf_counter() > deadline:
-                    return UNKNOWN
+                    return Outcome(UNSAT)
+                if self._stopped or (deadline is not None and time.perf_counter() > deadline):
+                    return Outcome(UNKNOWN)
         finally:
             if timer is not None:
                 timer.cancel()
@@ -102,8 +137,5 @@ class SatBackend:
                 self.solver.clear_interrupt()
             self.stats["solve_s"] += time.perf_counter() - start
 
-    def value(self, v: int) -> bool:
-        return self.values[v - 1] > 0
 
-    def delete(self) -> None:
-        self.solver.delete()
+__all__ = ["BUDGET", "SOLVERS", "SatBackend", "THREAD_ROOM"]

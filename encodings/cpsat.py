@@ -1,6 +1,8 @@
 """The model in OR-Tools CP-SAT, written straight into the model proto: variable ``v`` of the
 model is CP-SAT variable ``v - 1``, its negation the CP-SAT literal ``-v``; clauses become
-``bool_or``, cardinality groups ``exactly_one`` / ``at_most_one``."""
+``bool_or``, cardinality groups ``exactly_one`` / ``at_most_one``. Assumptions and an
+objective's bound are constraints of one call (unit ``bool_or``, a linear constraint), added to
+a copy of the model; an objective is CP-SAT's own."""
 from __future__ import annotations
 
 import time
@@ -8,6 +10,7 @@ import time
 from ortools.sat.python import cp_model
 
 from . import SAT, UNKNOWN, UNSAT
+from .backend import Backend, Objective, Outcome
 from .model import Model, OutOfTime
 
 
@@ -15,74 +18,98 @@ def _lits(clause) -> list[int]:
     return [l - 1 if l > 0 else l for l in clause]
 
 
-class CpSatBackend:
-    """Solve a :class:`~.model.Model` with CP-SAT; clauses (lazy cuts) can be added between solves."""
+class CpSatBackend(Backend):
+    """Solve a :class:`~.model.Model` with CP-SAT (:class:`~.backend.Backend`)."""
 
-    def __init__(self, model: Model, threads: int = 1, seed: int = 0, deadline: float | None = None,
-                 presolve: bool = True) -> None:
-        self.model, self.threads, self.seed, self.presolve = model, threads, seed, presolve
+    def __init__(self, model: Model, cuts=None, threads: int = 1, seed: int = 0, presolve: bool = False,
+                 deadline: float | None = None) -> None:
+        super().__init__(model, cuts)
+        self.threads, self.seed, self.presolve = threads, seed, presolve
         self.cp = cp_model.CpModel()
         proto = self.cp.proto
         for _ in range(model.num_vars):
             proto.variables.add().domain.extend((0, 1))
-        self.add_clauses(model.clauses, deadline)
+        self._add(model.clauses, deadline)
         for group in model.exactly_one:
             proto.constraints.add().exactly_one.literals.extend(_lits(group))
         for group in model.at_most_one:
             proto.constraints.add().at_most_one.literals.extend(_lits(group))
-        self.values: list[int] | None = None
-        self.stats = {"conflicts": 0, "solves": 0, "solve_s": 0.0}
         self._solver: cp_model.CpSolver | None = None
         self._stopped = False
 
-    def add_clauses(self, clauses, deadline: float | None = None) -> None:
+    def add_clauses(self, clauses) -> None:
+        self._add(clauses, None)
+
+    def _add(self, clauses, deadline: float | None) -> None:
         constraints = self.cp.proto.constraints
         for k, c in enumerate(clauses):
             constraints.add().bool_or.literals.extend(_lits(c))
             if deadline is not None and k % 20_000 == 0 and time.perf_counter() > deadline:
                 raise OutOfTime
 
-    def solve(self, time_limit: float | None, minimize: list[int] | None = None,
-              hint: list[int] | None = None, presolve: bool | None = None, maximize: bool = False) -> str:
-        """``sat`` (proved optimal when minimizing), ``unsat`` or ``unknown``; a solution found
-        without proof of its optimum also returns ``unknown``, with :attr:`values` set.
-        ``minimize`` lists the variables whose count is minimized (``maximize``: maximized).
-        ``presolve`` overrides the backend's setting for this call."""
+    def size(self) -> dict:
+        return self.model.size()
+
+    def tune(self, threads: int | None = None, presolve: bool | None = None) -> None:
+        if threads is not None:
+            self.threads = threads
+        if presolve is not None:
+            self.presolve = presolve
+
+    def _solve(self, assumptions, deadline, objective, hint) -> Outcome:
         proto = self.cp.proto
-        if minimize is not None:
-            proto.clear_objective()
-            proto.objective.vars.extend([v - 1 for v in minimize])
-            proto.objective.coeffs.extend([-1 if maximize else 1] * len(minimize))
+        proto.clear_objective()
+        proto.clear_solution_hint()
+        if objective is not None:
+            proto.objective.vars.extend([v - 1 for v in objective.lits])
+            proto.objective.coeffs.extend([-1 if objective.maximize else 1] * len(objective.lits))
         if hint is not None:
-            proto.clear_solution_hint()
             proto.solution_hint.vars.extend(list(range(len(hint))))
             proto.solution_hint.values.extend([int(x) for x in hint])
+        cp = self.cp
+        if assumptions or (objective is not None and objective.at_most is not None):
+            cp = cp_model.CpModel()  # the call's own constraints go to a copy
+            cp.proto.copy_from(proto)
+            for lit in assumptions:
+                cp.proto.constraints.add().bool_or.literals.append(_lits([lit])[0])
+            if objective is not None and objective.at_most is not None:
+                _bound(cp.proto, objective)
+        return self._run(cp, deadline, objective)
+
+    def _run(self, cp: cp_model.CpModel, deadline: float | None, objective: Objective | None) -> Outcome:
         solver = cp_model.CpSolver()
         self._solver = solver
         if self._stopped:
-            return UNKNOWN
+            return Outcome(UNKNOWN)
         solver.parameters.num_workers = self.threads
         solver.parameters.random_seed = self.seed
-        solver.parameters.cp_model_presolve = self.presolve if presolve is None else presolve
-        if time_limit is not None:
-            solver.parameters.max_time_in_seconds = max(0.01, time_limit)
+        solver.parameters.cp_model_presolve = self.presolve
+        if deadline is not None:
+            solver.parameters.max_time_in_seconds = max(0.01, deadline - time.perf_counter())
         start = time.perf_counter()
-        status = solver.solve(self.cp)
+        status = solver.solve(cp)
         self.stats["solves"] += 1
         self.stats["conflicts"] += int(solver.num_conflicts)
         self.stats["solve_s"] += time.perf_counter() - start
         if status in (cp_model.OPTIMAL, cp_model.FEASIBLE):
-            self.values = list(solver.response_proto.solution)
-            proven = status == cp_model.OPTIMAL or minimize is None
-            return SAT if proven else UNKNOWN
-        self.values = None
-        return UNSAT if status == cp_model.INFEASIBLE else UNKNOWN
+            proven = status == cp_model.OPTIMAL or objective is None
+            return Outcome(SAT if proven else UNKNOWN, list(solver.response_proto.solution))
+        return Outcome(UNSAT if status == cp_model.INFEASIBLE else UNKNOWN)
 
     def stop(self) -> None:
-        """Stop a solve running in another thread (it returns ``unknown``), and any later one."""
         self._stopped = True
         if self._solver is not None:
             self._solver.stop_search()
 
-    def value(self, v: int) -> bool:
-        return self.values[v - 1] > 0
+
+def _bound(proto, objective: Objective) -> None:
+    """The objective's ``at_most`` as a constraint."""
+    if objective.chain:
+        for lit in _lits(objective.chain_bound(objective.at_most)):
+            proto.constraints.add().bool_or.literals.append(lit)
+        return
+    n = len(objective.lits)
+    linear = proto.constraints.add().linear
+    linear.vars.extend([v - 1 for v in objective.lits])
+    linear.coeffs.extend([1] * n)
+    linear.domain.extend((n - objective.at_most, n) if objective.maximize else (0, objective.at_most))

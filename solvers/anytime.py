@@ -47,8 +47,8 @@ from typing import Callable
 
 import numpy as np
 
-from bille.encodings.cnf import SAT, SOLVERS, UNKNOWN, SatBackend
-from bille.encodings.cpsat import CpSatBackend
+from bille.encodings import SAT, UNKNOWN
+from bille.encodings.backend import SOLVERS, open_backend
 from bille.encodings.model import Options, OutOfTime, build
 from bille.encodings.solution import decode
 from bille.instances import Instance, OptionError
@@ -58,7 +58,7 @@ from bille.instances.schedule import Schedule
 
 from .bounds import Bounds, lower_bound
 from .incumbent import EXHAUSTED, Incumbent, complete_search, fewer_robots, first_schedule, from_schedule, retry
-from .windows import Windows, solve_with_cuts
+from .windows import Windows
 
 try:  # the bound search runs in a forked child process where the platform has fork
     _FORK = multiprocessing.get_context("fork")
@@ -94,11 +94,9 @@ def plan(instance: Instance, *, time_limit: float = 60.0, window: int = 8, slice
     progress : called with ``{"lower": ..., "best": ..., "elapsed": ...}`` whenever either
         number changes (the command line draws a live line from it).
     """
-    if solver != "cpsat" and solver not in SOLVERS:
-        raise OptionError(f"anytime: unknown solver {solver!r} (expected cpsat or one of: {', '.join(SOLVERS)})")
-    if bound_solver != "cpsat" and bound_solver not in SOLVERS:
-        raise OptionError(f"anytime: unknown bound_solver {bound_solver!r} (expected cpsat or one of: "
-                          f"{', '.join(SOLVERS)})")
+    for name, value in (("solver", solver), ("bound_solver", bound_solver)):
+        if value not in SOLVERS:
+            raise OptionError(f"anytime: unknown {name} {value!r} (expected one of: {', '.join(SOLVERS)})")
     if window < 2 or slice <= 0:
         raise OptionError(f"anytime: window must be at least 2 and slice positive, got {window} and {slice}")
     return _Anytime(instance, time_limit, window, slice, parallel, (solver, bound_solver), swap, incumbent, bounds,
@@ -274,17 +272,13 @@ class _Rise:
                     self.model = build(inst, self.k, Options(), deadline=run.end)
                 except OutOfTime:
                     return
-                self.backend = (CpSatBackend(self.model, 1, presolve=False) if run.bound_solver == "cpsat"
-                                else SatBackend(self.model, run.bound_solver))
-            if isinstance(self.backend, CpSatBackend):  # eager connectivity: no cuts to add
-                status = self.backend.solve(max(0.01, until - time.perf_counter()))
-            else:
-                status = solve_with_cuts(self.backend, self.model, inst, [], until)
+                self.backend = open_backend(run.bound_solver, self.model, inst)
+            outcome = self.backend.solve(deadline=until)
+            status = outcome.status
             if status == UNKNOWN:
                 return
             if status == SAT:  # every horizon below k is infeasible: optimal
-                found = from_schedule(inst, Schedule.from_ids(inst, decode(self.model, inst, self.backend.value)),
-                                      "exact")
+                found = from_schedule(inst, Schedule.from_ids(inst, decode(self.model, inst, outcome.value)), "exact")
                 if found is None:
                     raise RuntimeError(f"anytime: the exact model gave an invalid schedule at horizon {self.k}")
                 run.improve(found)
@@ -297,8 +291,8 @@ class _Rise:
             self.k = max(self.k + 1, run.lower)
 
     def close(self) -> None:
-        if isinstance(self.backend, SatBackend):
-            self.backend.delete()
+        if self.backend is not None:
+            self.backend.close()
         self.model = self.backend = None
 
 

@@ -29,11 +29,9 @@ from typing import Callable
 import numpy as np
 
 from bille.encodings import SAT, UNKNOWN, UNSAT
-from bille.encodings.cnf import SOLVERS, SatBackend
-from bille.encodings.connectivity import connectivity_cuts, separator_cuts
-from bille.encodings.cpsat import CpSatBackend
+from bille.encodings.backend import SAT_SOLVERS, Objective, open_backend
 from bille.encodings.model import CONNECTIVITY, Options, OutOfTime, build
-from bille.encodings.solution import decode, tiles_at
+from bille.encodings.solution import decode
 from bille.instances import Instance, OptionError
 from bille.instances.result import Result
 from bille.instances.rules import goal_violation
@@ -130,8 +128,8 @@ def plan_sat(instance: Instance, *, time_limit: float | None = None, max_makespa
     reconfig-30: 18 s against 51 s for CaDiCaL with 8 horizons per model; lt-4: 4.8 s against
     24 s; compare-5: 0.4 s against 2.7 s.
     """
-    if solver not in SOLVERS:
-        raise OptionError(f"sat: unknown solver {solver!r} (expected one of: {', '.join(SOLVERS)})")
+    if solver not in SAT_SOLVERS:
+        raise OptionError(f"sat: unknown solver {solver!r} (expected one of: {', '.join(SAT_SOLVERS)})")
     return _Search("sat", instance, time_limit, max_makespan, connectivity, minimize_travel, (prune, prune_tiles),
                    _restriction(single_carry, keep_structure), solver=solver, chunk=chunk, incumbent=incumbent,
                    travel_time=travel_time, bounds=bounds, progress=progress).run()
@@ -251,19 +249,18 @@ class _Search(Lanes, SatSearch):
             return self.result("infeasible")
         return self._cpsat() if self.method == "cpsat" else self._sat()
 
-    # ---- lazy connectivity ------------------------------------------------------------------
+    def open(self, model, threads: int | None = None):
+        """A back end for ``model`` with this search's solver and settings."""
+        kw = self.kw
+        return open_backend(kw.get("solver", "cpsat"), model, self.instance, connectivity=self.options.connectivity,
+                            threads=threads or kw.get("threads", 1), seed=kw.get("seed", 0),
+                            presolve=kw.get("presolve", False), deadline=self.deadline)
 
-    def _check(self, backend, model) -> bool:
-        """Whether the backend's solution keeps the tiles connected; if not, add cuts."""
-        masks = tiles_at(model, self.instance, backend.value)
-        if self.options.connectivity == "cuts":
-            cuts = separator_cuts(model, self.instance, masks, model.candidates)
-        else:
-            cuts = connectivity_cuts(model, self.instance, masks)
-        if cuts:
-            backend.add_clauses(cuts)
-            self.stats["cuts"] += len(cuts)
-        return not cuts
+    def solved(self, backend, assumptions=(), **objective):
+        """``backend.solve`` until this search's deadline, its cuts counted in ``stats``."""
+        outcome = backend.solve(assumptions, self.deadline, **objective)
+        self.stats["cuts"] += outcome.cuts
+        return outcome
 
     # ---- CP-SAT: one model per horizon --------------------------------------------------------
 
@@ -282,16 +279,13 @@ class _Search(Lanes, SatSearch):
                 return self._proved_incumbent(proved_below)
             try:
                 model = build(self.instance, T, self.options, deadline=self.deadline)
-                backend = CpSatBackend(model, self.kw["threads"], self.kw["seed"], deadline=self.deadline,
-                                       presolve=self.kw["presolve"])
+                backend = self.open(model)
             except OutOfTime:
                 return self.timeout(proved_below)
-            self.stats["horizons"].append({"T": T, **model.size()})
+            self.stats["horizons"].append({"T": T, **backend.size()})
             began = time.perf_counter()
-            while True:
-                status = backend.solve(self.left())
-                if status != SAT or self._check(backend, model):
-                    break
+            outcome = self.solved(backend)
+            status = outcome.status
             self.stats["horizons"][-1].update(answer=status, time_s=round(time.perf_counter() - began, 3))
             self._report()
             if status == UNKNOWN:
@@ -302,16 +296,16 @@ class _Search(Lanes, SatSearch):
                     break
                 T += 1
                 continue
-            found = (model, backend)
-            self.incumbent = decode(model, self.instance, backend.value)
+            found = (model, backend, outcome)
+            self.incumbent = decode(model, self.instance, outcome.value)
             if T <= proved_below:
                 break
             T -= 1
         if found is None:
             return self._infeasible()
-        model, backend = found
+        model, backend, outcome = found
         self.stats["makespan_s"] = round(time.perf_counter() - self.start, 3)
-        ids = self._cpsat_travel(backend, model, self.incumbent)
+        ids = self.travel(backend, model, model.T, self.incumbent, outcome.values)
         self.stats["solver"] = backend.stats
         return self.result("optimal", ids, lower=model.T)
 
@@ -326,37 +320,33 @@ class _Search(Lanes, SatSearch):
                 try:
                     model = build(self.instance, k, self.options, min_done=None if self.method == "cpsat" else k,
                                   deadline=self.deadline)
-                    if self.method == "cpsat":
-                        backend = CpSatBackend(model, self.kw["threads"], self.kw["seed"], deadline=self.deadline,
-                                               presolve=self.kw["presolve"])
-                        ids = self._cpsat_travel(backend, model, ids)
-                    else:
-                        backend = SatBackend(model, self.kw["solver"])
-                        try:
-                            if self._sat_solve(backend, model, [model.done[k]]) == SAT:
-                                ids = self._sat_travel(backend, model, k,
-                                                       decode(model, self.instance, backend.value)[:, :k])
-                        finally:
-                            backend.delete()
+                    backend = self.open(model)
                 except OutOfTime:
-                    pass
+                    return self.result("optimal", ids, lower=k)
+                try:
+                    ids = self.travel(backend, model, k, ids)
+                finally:
+                    backend.close()
         return self.result("optimal", ids, lower=k)
 
-    def _cpsat_travel(self, backend, model, ids):
+    def travel(self, backend, model, k: int, ids, hint=None):
+        """``ids``, a schedule of the proved optimal makespan ``k``, or one of as many steps with
+        fewer tiles traveled: the motions up to step ``k`` minimized (``done[k]`` assumed where the
+        model has it) from ``hint`` (the schedule's assignment, if known), within the minimization's
+        time (``travel_time``). ``stats.tiles_traveled_optimal`` says whether the minimum was proved."""
         self.stats["tiles_traveled_optimal"] = False
         if not self.minimize_travel:
             return ids
-        hint = None if backend.values is None else list(backend.values)  # a solution to start from
+        steps = {v: t for (_, t), group in model.y.items() for v, _, _ in group}
+        motion = [v for v in model.motion if steps[v] <= k]  # done[k] excludes the later ones
+        backend.tune(presolve=True)  # CP-SAT: an objective profits from presolve
         with self.travel_time():
-            while True:
-                status = backend.solve(self.left(), minimize=model.motion, hint=hint, presolve=True)
-                if backend.values is None:
-                    return ids  # timed out before any better solution: keep the first one
-                if not self._check(backend, model):
-                    continue
-                ids = decode(model, self.instance, backend.value)
-                self.stats["tiles_traveled_optimal"] = status == SAT
-                return ids
+            outcome = self.solved(backend, [model.done[k]] if k in model.done else [], objective=Objective(motion),
+                                  hint=hint)
+        if outcome.values is None:
+            return ids  # no better schedule in time: keep this one
+        self.stats["tiles_traveled_optimal"] = outcome.status == SAT
+        return decode(model, self.instance, outcome.value)[:, :k]
 
     def _infeasible(self) -> Result:
         """No schedule within the horizon cap: not a proof that none exists (a longer one may),

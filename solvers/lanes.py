@@ -15,7 +15,6 @@ import time
 from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 
 from bille.encodings import SAT, UNKNOWN, UNSAT
-from bille.encodings.cpsat import CpSatBackend
 from bille.encodings.model import OutOfTime, build
 from bille.encodings.solution import decode
 
@@ -45,12 +44,11 @@ class Lanes:
                 while len(running) < lanes and next_T <= self.cap and (best is None or next_T < best):
                     try:
                         model = build(self.instance, next_T, self.options, deadline=self.deadline)
-                        backend = CpSatBackend(model, 1, self.kw["seed"], deadline=self.deadline,
-                                               presolve=self.kw["presolve"])
+                        backend = self.open(model, threads=1)
                     except OutOfTime:
                         return self.timeout(proved_below)
                     with self._lock:
-                        self.stats["horizons"].append({"T": next_T, **model.size()})
+                        self.stats["horizons"].append({"T": next_T, **backend.size()})
                     running[pool.submit(self._lane, backend, model)] = (next_T, model, backend)
                     next_T += 1
                 if not running:
@@ -58,7 +56,9 @@ class Lanes:
                 done, _ = wait(running, return_when=FIRST_COMPLETED)
                 for future in done:
                     T, model, backend = running.pop(future)
-                    status, spent = future.result()
+                    outcome, spent = future.result()
+                    status = outcome.status
+                    self.stats["cuts"] += outcome.cuts
                     with self._lock:
                         row = next(h for h in self.stats["horizons"] if h["T"] == T and "answer" not in h)
                         row.update(answer=status, time_s=round(spent, 3))
@@ -69,7 +69,7 @@ class Lanes:
                         return self.timeout(proved_below)
                     answers[T] = status
                     if status == SAT:
-                        found[T] = (model, backend)
+                        found[T] = (model, backend, outcome)
                         for U, _, b in running.values():
                             if U > T:
                                 stopped.add(U)
@@ -87,18 +87,16 @@ class Lanes:
             pool.shutdown(wait=True)
             for row in self.stats["horizons"]:  # the horizons left undecided when the search ended
                 row.setdefault("answer", "stopped" if row["T"] in stopped else UNKNOWN)
-        model, backend = found[proved_below]
-        self.incumbent = decode(model, self.instance, backend.value)
+        model, backend, outcome = found[proved_below]
+        self.incumbent = decode(model, self.instance, outcome.value)
         self.stats["makespan_s"] = round(time.perf_counter() - self.start, 3)
-        backend.threads = lanes  # the minimization of tiles traveled gets every worker
-        ids = self._cpsat_travel(backend, model, self.incumbent)
+        backend.tune(threads=lanes)  # the minimization of tiles traveled gets every worker
+        ids = self.travel(backend, model, model.T, self.incumbent, outcome.values)
         self.stats["solver"] = backend.stats
         return self.result("optimal", ids, lower=model.T)
 
-    def _lane(self, backend, model) -> tuple[str, float]:
-        """Decide one horizon (with lazy connectivity, cuts until a solution holds)."""
+    def _lane(self, backend, model) -> tuple:
+        """Decide one horizon: its outcome and the seconds it took."""
         began = time.perf_counter()
-        while True:
-            status = backend.solve(self.left())
-            if status != SAT or self._check(backend, model):
-                return status, time.perf_counter() - began
+        outcome = backend.solve(deadline=self.deadline)
+        return outcome, time.perf_counter() - began

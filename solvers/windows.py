@@ -7,30 +7,17 @@ import time
 
 import numpy as np
 
-from bille.encodings.cnf import SAT, UNKNOWN, UNSAT, SatBackend
-from bille.encodings.connectivity import connectivity_cuts
-from bille.encodings.cpsat import CpSatBackend
+from bille.encodings import SAT, UNKNOWN, UNSAT
+from bille.encodings.backend import Objective, open_backend
 from bille.encodings.ends import roles_taken
 from bille.encodings.model import Options, OutOfTime, build
-from bille.encodings.solution import decode, tiles_at
+from bille.encodings.solution import decode
 from bille.instances import Instance, instance_at
 from bille.instances.grid import Grid
 from bille.instances.rules import run
 from bille.instances.schedule import Schedule
 
 from .incumbent import Incumbent, from_schedule
-
-
-def solve_with_cuts(backend: SatBackend, model, instance: Instance, assumptions, deadline) -> str:
-    """Solve, adding connectivity cuts while a solution breaks it (lazily encoded parts)."""
-    while True:
-        status = backend.solve(assumptions, deadline)
-        if status != SAT:
-            return status
-        cuts = connectivity_cuts(model, instance, tiles_at(model, instance, backend.value))
-        if not cuts:
-            return status
-        backend.add_clauses(cuts)
 
 
 class Windows:
@@ -94,10 +81,7 @@ class Windows:
         except OutOfTime:
             counts["undecided"] += 1
             return UNKNOWN
-        if run.solver == "cpsat":
-            found = _shortest_cpsat(model, sub, L, until)
-        else:
-            found = _shortest_sat(model, sub, L, until, run.solver)
+        found = shortest_part(model, sub, L, until, run.solver)
         if isinstance(found, str):
             counts["undecided" if found == UNKNOWN else "not_shorter"] += 1
             return self._proved(best.makespan) if found == UNSAT and whole else found
@@ -113,48 +97,18 @@ class Windows:
         return SAT
 
 
-def _shortest_sat(model, sub: Instance, L: int, until: float, solver: str):
-    """The window's shortest part with a python-sat solver: ``done[L]`` assumed, then, while a
-    part of ``k`` steps is found (its first ``k`` steps: the smallest ``k`` with ``done[k]``),
-    ``done[k - 1]``. Returns ``(k, part, roles, shortest)`` for the shortest part found
-    (``shortest``: none has fewer steps: ``done[k - 1]`` was refuted, or ``k`` is 1), else
-    ``unsat`` or ``unknown``."""
-    backend = SatBackend(model, solver)
-    try:
-        status = solve_with_cuts(backend, model, sub, [model.done[L]], until)
-        if status != SAT:
-            return status
-        found = _part(model, sub, backend, _length(model, backend, L))
-        while found[0] > 1 and (status := solve_with_cuts(backend, model, sub, [model.done[found[0] - 1]],
-                                                          until)) == SAT:
-            found = _part(model, sub, backend, _length(model, backend, L))
-        return found + (status == UNSAT or found[0] == 1,)
-    finally:
-        backend.delete()
-
-
-def _length(model, backend, L: int) -> int:
-    """The number of steps of the backend's solution: the smallest ``k`` with ``done[k]``."""
-    return next(k for k in range(1, L + 1) if backend.value(model.done[k]))
-
-
-def _shortest_cpsat(model, sub: Instance, L: int, until: float):
-    """The window's shortest part with one CP-SAT worker: ``done[L]`` required, as many steps
-    ``done`` as can be (``done[k]``: every robot waits from step ``k`` on). Returns ``(k, part,
-    roles, shortest)`` for the best part found (``shortest``: proved so), else ``unsat`` or
+def shortest_part(model, sub: Instance, L: int, until: float, solver: str):
+    """The window's shortest part: ``done[L]`` required, as many steps ``done`` as can be
+    (``done[k]``: every robot waits from step ``k`` on). Returns ``(k, part, roles, shortest)``
+    for the best part found (its first ``k`` steps; ``shortest``: proved so), else ``unsat`` or
     ``unknown``."""
-    backend = CpSatBackend(model, 1, presolve=False)
-    backend.add_clauses([[model.done[L]]])
-    status = backend.solve(max(0.01, until - time.perf_counter()), minimize=[model.done[k] for k in range(1, L + 1)],
-                           maximize=True)
-    if backend.values is None:
-        return status
-    return _part(model, sub, backend, _length(model, backend, L)) + (status == SAT,)
-
-
-def _part(model, sub: Instance, backend, k: int):
-    """``(k, part, roles)`` of the backend's solution: its first ``k`` steps are the part."""
-    return k, decode(model, sub, backend.value), roles_taken(model, backend.value, sub.num_robots)
+    done = [model.done[k] for k in range(1, L + 1)]
+    with open_backend(solver, model, sub) as backend:
+        outcome = backend.solve(deadline=until, objective=Objective(done, maximize=True, chain=True, at_most=L - 1))
+    if outcome.values is None:
+        return outcome.status
+    k = next(k for k in range(1, L + 1) if outcome.value(model.done[k]))
+    return k, decode(model, sub, outcome.value), roles_taken(model, outcome.value, sub.num_robots), outcome.status == SAT
 
 
 def run_states(instance: Instance, ids: np.ndarray):

@@ -266,7 +266,7 @@ def test_gap_uses_a_bound_from_the_metadata():
 def test_a_window_may_end_with_interchangeable_robots_in_each_others_places():
     # two point robots on a one-row strip cannot pass each other: a window that must end with
     # them exchanged is infeasible, unless they may take each other's roles (then waiting does)
-    from bille.encodings.cnf import SatBackend
+    from bille.encodings.backend import open_backend
     from bille.encodings.ends import roles_taken
     from bille.encodings.model import Options, build
 
@@ -275,20 +275,15 @@ def test_a_window_may_end_with_interchangeable_robots_in_each_others_places():
     exchanged = dataclasses.replace(start, poses=start.poses[::-1])
     for swap, answer in ((False, False), (True, True)):
         model = build(inst, 3, Options(), end=exchanged, swap=swap)
-        backend = SatBackend(model)
-        try:
-            assert backend.solve([], None) == ("sat" if answer else "unsat")
-            if answer:
-                assert roles_taken(model, backend.value, 2) == [1, 0]
-        finally:
-            backend.delete()
+        with open_backend("cadical195", model, inst) as backend:
+            outcome = backend.solve()
+        assert outcome.status == ("sat" if answer else "unsat")
+        if answer:
+            assert roles_taken(model, outcome.value, 2) == [1, 0]
     with_goals = make("TTTT", [{"at": [0, 0]}, {"at": [3, 0]}], moveset="point", robot_goals=[[0, 0], None])
     model = build(with_goals, 3, Options(), end=exchanged, swap=True)  # a robot with a goal keeps its role
-    backend = SatBackend(model)
-    try:
-        assert backend.solve([], None) == "unsat"
-    finally:
-        backend.delete()
+    with open_backend("cadical195", model, with_goals) as backend:
+        assert backend.solve().status == "unsat"
 
 
 @pytest.mark.slow

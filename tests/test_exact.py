@@ -202,12 +202,12 @@ def test_a_timeout_returns_the_bound_not_a_crash(method):
 @pytest.mark.parametrize("method", ["cpsat", "sat"])
 @pytest.mark.parametrize("name", ["compare-5", "bridge-2"])
 def test_a_timeout_returns_the_incumbent(method, name, monkeypatch):
+    from bille.encodings.backend import Backend, Outcome
     from bille.encodings.cnf import SatBackend
-    from bille.encodings.cpsat import CpSatBackend
 
     # the solver runs out of time at its first call, whatever the machine's speed
-    monkeypatch.setattr(CpSatBackend, "solve", lambda self, *a, **k: "unknown")
-    monkeypatch.setattr(SatBackend, "solve", lambda self, *a, **k: "unknown")
+    monkeypatch.setattr(Backend, "solve", lambda self, *a, **k: Outcome("unknown"))
+    monkeypatch.setattr(SatBackend, "solve", lambda self, *a, **k: Outcome("unknown"))
     inst = load_instance(bundled_path(name))
     result = solve(inst, method, time_limit=600)
     assert result.status == "feasible"
@@ -350,18 +350,15 @@ def test_the_default_cap_gives_way_to_a_longer_incumbent(method, optimum, monkey
 def test_a_sat_solve_past_its_deadline_answers_unknown_without_solving(solver):
     import time
 
-    from bille.encodings.cnf import SatBackend
+    from bille.encodings.backend import open_backend
     from bille.encodings.model import Options, build
 
     inst = load_instance(bundled_path("corridor-2"))
-    backend = SatBackend(build(inst, 13, Options()), solver)
-    try:
-        assert backend.solve([], time.perf_counter() - 1) == "unknown"
+    with open_backend(solver, build(inst, 13, Options()), inst) as backend:
+        assert backend.solve([], time.perf_counter() - 1).status == "unknown"
         assert backend.stats["conflicts"] == 0
-        assert backend.solve([], time.perf_counter() + 600) == "sat"  # a timer that never fires
-        assert backend.solve([], None) == "sat"  # and left no interrupt behind
-    finally:
-        backend.delete()
+        assert backend.solve([], time.perf_counter() + 600).status == "sat"  # a timer that never fires
+        assert backend.solve([], None).status == "sat"  # and left no interrupt behind
 
 
 def test_no_timer_thread_under_a_tight_address_space_limit():
@@ -372,19 +369,21 @@ def test_no_timer_thread_under_a_tight_address_space_limit():
 
     code = """
 import resource, threading, time
-from bille.encodings.cnf import THREAD_ROOM, SatBackend
+from bille.encodings.backend import open_backend
+from bille.encodings.cnf import THREAD_ROOM
 from bille.encodings.model import Options, build
 from bille.instances import load_instance
 from bille.instances.bundled import bundled_path
 from bille.instances.limits import address_room, mapped
 assert address_room() == float("inf")
-backend = SatBackend(build(load_instance(bundled_path("corridor-2")), 12, Options()), "glucose42")
+inst = load_instance(bundled_path("corridor-2"))
+backend = open_backend("glucose42", build(inst, 12, Options()), inst)
 size = mapped() + THREAD_ROOM // 4
 resource.setrlimit(resource.RLIMIT_AS, (size, size))
 assert 0 < address_room() < THREAD_ROOM
 started = []
 threading.Timer = lambda *args: started.append(args)  # a timer would be created through this
-assert backend.solve([], time.perf_counter() + 60) == "unsat"  # corridor-2's optimum is 13
+assert backend.solve([], time.perf_counter() + 60).status == "unsat"  # corridor-2's optimum is 13
 assert not started
 print("ok")
 """

@@ -141,7 +141,7 @@ FREEDOMS = (("all", Options()), ("keep_structure", Options(keep_structure=True))
 
 
 def freedom_table(time_limit: float, threads: int, echo) -> None:
-    from bille.encodings.cpsat import CpSatBackend
+    from bille.encodings.backend import open_backend
 
     echo(f"7. where a proof's time goes: the horizon below the optimum, all schedules against those that keep "
          f"the structure (keep_structure) and those that carry every tile once (single_carry); one CP-SAT worker, "
@@ -153,8 +153,8 @@ def freedom_table(time_limit: float, threads: int, echo) -> None:
         cells = []
         for _, options in FREEDOMS:
             model = build(inst, T, options)
-            backend = CpSatBackend(model, presolve=False)
-            answer = backend.solve(time_limit)
+            backend = open_backend("cpsat", model, inst)
+            answer = backend.solve(deadline=time.perf_counter() + time_limit).status
             cells.append(f"{model.num_vars:>9} {answer:>8} {backend.stats['solve_s']:>9.1f}")
         echo(f"   {name:<12} {T:>3} {' '.join(f'{c:>30}' for c in cells)}")
 
