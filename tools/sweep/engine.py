@@ -165,9 +165,10 @@ def _orphaned(parent: int) -> None:
 
 def _start(child) -> None:
     """Start ``child``, also from a daemonic process: Dask's workers are daemons, and
-    multiprocessing refuses children there lest a killed daemon leave them behind. Ours is
-    joined or killed by :func:`execute` itself, and a daemon of its own, so the flag is lifted
-    for the start alone."""
+    multiprocessing refuses children there lest a killed daemon leave them behind (set
+    ``distributed.worker.daemon: false`` and they are not). Ours is joined or killed with its
+    process group by :func:`execute` itself, and ends itself when orphaned, so the flag is
+    lifted for the start alone."""
     config = multiprocessing.current_process()._config
     daemon = config.get("daemon")
     config["daemon"] = False
