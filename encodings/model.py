@@ -50,7 +50,7 @@ from bille.instances.moveset import Kind
 
 from .connectivity import eager_connectivity
 from .ends import add_end_constraints, end_roles
-from .prune import candidate_cells, change_window, reachable_poses
+from .prune import change_window, prune
 
 CONNECTIVITY = ("eager", "lazy", "cuts")
 # the action kinds as plain ints, compared in the inner loops (an enum's attribute lookup there was
@@ -162,8 +162,9 @@ class _Builder:
         return self.m.true if value else -self.m.true
 
     def build(self, min_done: int | None) -> Model:
-        reachable_poses(self)
-        candidate_cells(self)
+        pruned = prune(self.inst, self.T, self.opt, self.end, self.roles)
+        self.R, self.cand, self.cells, self.timed = pruned.poses, pruned.cand, pruned.cells, pruned.timed
+        self.m.candidates = pruned.cand
         self._family("tiles, loads and poses", self._variables)
         self._family("actions", self._actions)  # with the poses they lead to and the new feet on tiles
         if self.end is not None:
@@ -189,7 +190,7 @@ class _Builder:
     def _variables(self) -> None:
         m, T, inst = self.m, self.T, self.inst
         goal, start = inst.goal_tiles, inst.start.tiles
-        window = change_window(self) if self.opt.prune_cells else {}
+        window = change_window(inst, self.R, T) if self.opt.prune_cells else {}
         for c in self.cells:
             # a cell never in reach keeps its start value; if the goal differs, the clauses of
             # step T contradict and this horizon is infeasible
