@@ -41,35 +41,28 @@ proved it optimal), and the seconds spent on each search.
 """
 from __future__ import annotations
 
-import multiprocessing
 import time
 from typing import Callable
 
 import numpy as np
 
-from bille.encodings import SAT, UNKNOWN
-from bille.encodings.backend import SOLVERS, open_backend
-from bille.encodings.model import Options, OutOfTime, build
-from bille.encodings.solution import decode
+from bille.encodings.backend import SAT_SOLVERS, SOLVERS
 from bille.instances import Instance, OptionError
 from bille.instances.result import Result
 from bille.instances.rules import goal_violation
 from bille.instances.schedule import Schedule
 
 from .bounds import Bounds, lower_bound
+from .bracket import Bracket
 from .incumbent import EXHAUSTED, Incumbent, complete_search, fewer_robots, first_schedule, from_schedule, retry
+from .rise import FORK, Background, Rise
 from .windows import Windows
-
-try:  # the bound search runs in a forked child process where the platform has fork
-    _FORK = multiprocessing.get_context("fork")
-except ValueError:
-    _FORK = None
 
 
 def plan(instance: Instance, *, time_limit: float = 60.0, window: int = 8, slice: float = 2.0,
          parallel: bool = True, solver: str = "minisat22", bound_solver: str = "cpsat", swap: bool = True,
-         incumbent: Schedule | None = None, bounds: Bounds | None = None,
-         progress: Callable | None = None) -> Result:
+         incumbent: Schedule | None = None, bounds: Bounds | None = None, progress: Callable | None = None,
+         on_schedule: Callable | None = None, on_bound: Callable | None = None) -> Result:
     """Anytime certified solving (module docstring).
 
     Parameters
@@ -93,91 +86,83 @@ def plan(instance: Instance, *, time_limit: float = 60.0, window: int = 8, slice
     incumbent : a schedule to start from instead of the heuristics' (must be valid).
     progress : called with ``{"lower": ..., "best": ..., "elapsed": ...}`` whenever either
         number changes (the command line draws a live line from it).
+    on_schedule, on_bound : called with each shorter schedule found (an
+        :class:`~.incumbent.Incumbent`) and each higher bound proved (:class:`.bracket.Bracket`).
     """
     for name, value in (("solver", solver), ("bound_solver", bound_solver)):
         if value not in SOLVERS:
-            raise OptionError(f"anytime: unknown {name} {value!r} (expected one of: {', '.join(SOLVERS)})")
+            raise OptionError(f"anytime: unknown {name} {value!r} (expected cpsat or one of: {', '.join(SAT_SOLVERS)})")
     if window < 2 or slice <= 0:
         raise OptionError(f"anytime: window must be at least 2 and slice positive, got {window} and {slice}")
-    return _Anytime(instance, time_limit, window, slice, parallel, (solver, bound_solver), swap, incumbent, bounds,
-                    progress).run()
+    for name, value in (("on_schedule", on_schedule), ("on_bound", on_bound)):
+        if value is not None and not callable(value):
+            raise OptionError(f"anytime: {name} must be a function, got {value!r}")
+    bounds = bounds or lower_bound(instance)
+    bracket = Bracket(bounds.lower)
+    report = None if progress is None else _reporter(bracket, progress)
+    for tell, subscribers in ((report, bracket.on_schedule), (report, bracket.on_bound), (on_schedule,
+                              bracket.on_schedule), (on_bound, bracket.on_bound)):
+        if tell is not None:
+            subscribers.append(tell)
+    search = _Anytime(instance, bracket, time_limit, window, slice, parallel, solver, bound_solver, swap, report)
+    return search.run(bounds, incumbent)
+
+
+def _reporter(bracket: Bracket, progress: Callable) -> Callable:
+    def report(*_) -> None:
+        progress({"lower": bracket.lower, "best": None if bracket.best is None else bracket.best.makespan,
+                  "elapsed": bracket.elapsed()})
+
+    return report
 
 
 class _Anytime:
-    def __init__(self, instance, time_limit, window, slice_s, parallel, solvers, swap, incumbent, bounds,
-                 progress):
-        self.instance, self.window, self.slice, self.swap = instance, window, slice_s, swap
-        self.solver, self.bound_solver = solvers
-        self.parallel = parallel
-        self.start = time.perf_counter()
-        self.end = self.start + time_limit
-        self.bounds = bounds or lower_bound(instance)
-        self.lower = self.bounds.lower
-        self.progress = progress
-        self.given = incumbent
-        self.cut: list = []  # the first schedule's runs that ran out of their share
-        self.best: Incumbent | None = None
-        self.stats = {"improvements": [], "lower_bounds": [],
-                      "windows": {"tried": 0, "shortened": 0, "swapped": 0, "not_shorter": 0, "undecided": 0},
-                      "bound_s": 0.0, "search_s": 0.0}
+    """One run: the bracket, the parts that narrow it, and the statistics."""
 
-    def elapsed(self) -> float:
-        return time.perf_counter() - self.start
+    def __init__(self, instance, bracket, time_limit, window, slice_s, parallel, solver, bound_solver, swap,
+                 report) -> None:
+        self.instance, self.bracket, self.slice = instance, bracket, slice_s
+        self.parallel, self.bound_solver, self.report = parallel, bound_solver, report
+        self.end = bracket.start + time_limit
+        self.cut: list = []  # the first schedule's runs that ran out of their share
+        self.windows = Windows(instance, bracket, solver, window, slice_s, swap, self.end)
+        self.stats = {"improvements": bracket.improvements, "lower_bounds": bracket.lower_bounds,
+                      "windows": self.windows.counts, "bound_s": 0.0, "search_s": 0.0}
 
     def left(self) -> float:
         return self.end - time.perf_counter()
 
-    def closed(self) -> bool:
-        return self.best is not None and self.lower >= self.best.makespan
-
-    def report(self) -> None:
-        if self.progress is not None:
-            self.progress({"lower": self.lower, "best": None if self.best is None else self.best.makespan,
-                           "elapsed": self.elapsed()})
-
-    def improve(self, found: Incumbent) -> bool:
-        if self.best is not None and found.makespan >= self.best.makespan:
-            return False
-        self.best = found
-        self.stats["improvements"].append([round(self.elapsed(), 3), found.makespan])
-        self.report()
-        return True
-
-    def raise_lower(self, value: int) -> None:
-        if value > self.lower:
-            self.lower = value
-            self.stats["lower_bounds"].append([round(self.elapsed(), 3), value])
-            self.report()
-
-    # ---- the run -----------------------------------------------------------------------------
-
-    def run(self) -> Result:
-        inst = self.instance
-        if self.bounds.impossible:
-            self.stats["reason"] = "; ".join(self.bounds.impossible)
+    def run(self, bounds: Bounds, given: Schedule | None) -> Result:
+        inst, bracket = self.instance, self.bracket
+        if bounds.impossible:
+            self.stats["reason"] = "; ".join(bounds.impossible)
             return self.result("infeasible")
         if goal_violation(inst.world, inst.start_state, inst.goal_tiles, inst.goal_cells, 0) is None:
-            self.best, self.lower = Incumbent(np.zeros((inst.num_robots, 0), np.int64), 0, "none"), 0
+            bracket.best, bracket.lower = Incumbent(np.zeros((inst.num_robots, 0), np.int64), 0, "none"), 0
             return self.result("optimal")
-        given = self._given()
-        background = self.parallel and _FORK is not None
-        rise = _Background(self) if background else None  # the bound search starts at once, beside the heuristics
+        first = self._given(given)
+        background = self.parallel and FORK is not None
+        # the bound search starts at once, beside the heuristics
+        rise = Background(inst, self.bound_solver, bracket, self.end) if background else None
         try:
-            self._first(given)
-            rise = rise or _Rise(self)
-            windows = Windows(self)
-            seek = _Seek(self)
-            while not self.closed() and self.left() > 0 and not seek.infeasible:
+            self._first(first)
+            rise = rise or Rise(inst, self.bound_solver, bracket, self.end)
+            seek = _Seek(inst, self.cut, bracket.start, self.end)
+            while not bracket.closed and self.left() > 0 and not seek.infeasible:
                 began = time.perf_counter()
                 rise.step(min(self.end, began + (0 if background else self.slice)))
                 self.stats["bound_s"] += time.perf_counter() - began
-                if self.best is None and not self.closed():
-                    seek.step()
+                if bracket.best is None and not bracket.closed:
+                    began = time.perf_counter()
+                    found = seek.step()
+                    self.stats["seek_s"] = round(self.stats.get("seek_s", 0.0) + time.perf_counter() - began, 3)
+                    if found is not None:
+                        self.start_from(found)
                     continue
-                if self.closed():
+                if bracket.closed:
                     continue
                 began = time.perf_counter()
-                windows.step(min(self.end, began + self.slice))
+                self.windows.step(min(self.end, began + self.slice))
                 self.stats["search_s"] += time.perf_counter() - began
             rise.step(time.perf_counter())  # what the bound search sent while the last part ran
         finally:
@@ -186,15 +171,15 @@ class _Anytime:
         if seek.infeasible:
             self.stats["reason"] = EXHAUSTED
             return self.result("infeasible")
-        if self.best is None:
+        if bracket.best is None:
             return self.result("timeout")
-        return self.result("optimal" if self.closed() else "feasible")
+        return self.result("optimal" if bracket.closed else "feasible")
 
-    def _given(self) -> Incumbent | None:
+    def _given(self, given: Schedule | None) -> Incumbent | None:
         """The schedule given to start from, checked by the validator (None if none was given)."""
-        if self.given is None:
+        if given is None:
             return None
-        found = from_schedule(self.instance, self.given, "given")
+        found = from_schedule(self.instance, given, "given")
         if found is None:
             raise OptionError(f"anytime: the incumbent schedule is not valid for instance "
                               f"'{self.instance.name}' (bille check says why)")
@@ -204,21 +189,23 @@ class _Anytime:
         found = given or first_schedule(self.instance, max(0.01, min(10.0, 0.2 * self.left())), cut=self.cut)
         if found is not None:
             self.start_from(found)
-        else:
+        elif self.report is not None:
             self.report()
 
     def start_from(self, found: Incumbent) -> None:
         """``found`` is the first schedule: ``stats.first`` names it."""
-        self.stats["first"] = {"method": found.method, "makespan": found.makespan, "s": round(self.elapsed(), 3)}
-        self.improve(found)
+        self.stats["first"] = {"method": found.method, "makespan": found.makespan,
+                               "s": round(self.bracket.elapsed(), 3)}
+        self.bracket.offer(found)
 
     def result(self, status: str) -> Result:
         for key in ("bound_s", "search_s"):
             self.stats[key] = round(self.stats[key], 3)
-        schedule = None if self.best is None else Schedule.from_ids(self.instance, self.best.ids,
-                                                                    meta={"method": "anytime"})
-        lower = None if status == "infeasible" else self.lower
-        return Result("anytime", status, schedule, lower_bound=lower, stats=self.stats, time_s=self.elapsed())
+        best = self.bracket.best
+        schedule = None if best is None else Schedule.from_ids(self.instance, best.ids, meta={"method": "anytime"})
+        lower = None if status == "infeasible" else self.bracket.lower
+        return Result("anytime", status, schedule, lower_bound=lower, stats=self.stats,
+                      time_s=self.bracket.elapsed())
 
 
 class _Seek:
@@ -233,125 +220,20 @@ class _Seek:
     schedule with seed 0, 37 and 39 s with seeds 1 and 3, none in 40 s with seed 2), so it is
     not cut into restarts."""
 
-    def __init__(self, run: _Anytime) -> None:
-        self.run, self.infeasible = run, False
-        tenth = max(2.0, 0.1 * (run.end - run.start))
+    def __init__(self, instance: Instance, cut: list, start: float, end: float) -> None:
+        self.instance, self.cut, self.end, self.infeasible = instance, cut, end, False
+        tenth = max(2.0, 0.1 * (end - start))
         self.stages = [("fewer robots", 2 * tenth)]  # (stage, seconds), in turn
-        self.stages += [("retry", 3 * tenth)] if run.cut else []
+        self.stages += [("retry", 3 * tenth)] if cut else []
         self.stages += [("complete", tenth)]
 
-    def step(self) -> None:
-        run = self.run
-        began = time.perf_counter()
+    def step(self) -> Incumbent | None:
+        """The next stage; the schedule it found, or None."""
         stage, seconds = self.stages.pop(0) if self.stages else ("complete", float("inf"))
-        budget = max(0.01, min(seconds, run.left()))
+        budget = max(0.01, min(seconds, self.end - time.perf_counter()))
         if stage == "retry":
-            found = retry(run.instance, run.cut, budget)
-        elif stage == "fewer robots":
-            found = fewer_robots(run.instance, budget)
-        else:
-            found, self.infeasible = complete_search(run.instance, budget)
-        run.stats["seek_s"] = round(run.stats.get("seek_s", 0.0) + time.perf_counter() - began, 3)
-        if found is not None:
-            run.start_from(found)
-
-
-class _Rise:
-    """The exact makespan search from the lower bound up, in slices (module docstring)."""
-
-    def __init__(self, run: _Anytime) -> None:
-        self.run, self.k = run, max(1, run.lower)
-        self.model = self.backend = None
-        self.finished = False  # an optimal schedule was found
-
-    def step(self, until: float) -> None:
-        run, inst = self.run, self.run.instance
-        while time.perf_counter() < until and not run.closed():
-            if self.backend is None:
-                try:
-                    self.model = build(inst, self.k, Options(), deadline=run.end)
-                except OutOfTime:
-                    return
-                self.backend = open_backend(run.bound_solver, self.model, inst)
-            outcome = self.backend.solve(deadline=until)
-            status = outcome.status
-            if status == UNKNOWN:
-                return
-            if status == SAT:  # every horizon below k is infeasible: optimal
-                found = from_schedule(inst, Schedule.from_ids(inst, decode(self.model, inst, outcome.value)), "exact")
-                if found is None:
-                    raise RuntimeError(f"anytime: the exact model gave an invalid schedule at horizon {self.k}")
-                run.improve(found)
-                run.raise_lower(found.makespan)
-                self.finished = True
-                self.close()
-                return
-            run.raise_lower(self.k + 1)
-            self.close()
-            self.k = max(self.k + 1, run.lower)
-
-    def close(self) -> None:
-        if self.backend is not None:
-            self.backend.close()
-        self.model = self.backend = None
-
-
-class _Background:
-    """The same search in a child process, on a core of its own: it sends each proved bound, or
-    an optimal schedule, through a pipe; the parent reads them between windows."""
-
-    def __init__(self, run: _Anytime) -> None:
-        self.run = run
-        self.inbox, outbox = _FORK.Pipe(duplex=False)
-        self.child = _FORK.Process(target=_rise_child, args=(run, outbox), daemon=True)
-        self.child.start()
-        outbox.close()
-
-    def step(self, until: float) -> None:
-        self.wait(until)
-
-    def wait(self, until: float) -> None:
-        run = self.run
-        while not run.closed():
-            if not self.inbox.poll(max(0.0, until - time.perf_counter())):
-                return
-            try:
-                kind, value = self.inbox.recv()
-            except EOFError:
-                return
-            if kind == "lower":
-                run.raise_lower(value)
-            else:
-                found = from_schedule(run.instance, Schedule.from_ids(run.instance, np.array(value)), "exact")
-                if found is None:
-                    raise RuntimeError("anytime: the exact model gave an invalid schedule")
-                run.improve(found)
-                run.raise_lower(found.makespan)
-
-    def close(self) -> None:
-        if self.child.is_alive():
-            self.child.terminate()
-        self.child.join()
-        self.inbox.close()
-
-
-def _rise_child(run: _Anytime, outbox) -> None:
-    """The child's loop: raise the bound until the time limit or an optimal schedule."""
-    run.progress = None
-    sent = run.lower
-
-    def send_lower(value):
-        nonlocal sent
-        if value > sent:
-            sent = value
-            outbox.send(("lower", value))
-
-    run.raise_lower = send_lower
-    run.improve = lambda found: outbox.send(("optimal", found.ids.tolist())) or True
-    rise = _Rise(run)
-    while run.left() > 0:
-        rise.step(run.end)
-        if rise.finished:
-            break
-    rise.close()
-    outbox.close()
+            return retry(self.instance, self.cut, budget)
+        if stage == "fewer robots":
+            return fewer_robots(self.instance, budget)
+        found, self.infeasible = complete_search(self.instance, budget)
+        return found

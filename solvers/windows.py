@@ -17,18 +17,26 @@ from bille.instances.grid import Grid
 from bille.instances.rules import run
 from bille.instances.schedule import Schedule
 
+from .bracket import Bracket
 from .incumbent import Incumbent, from_schedule
 
 
 class Windows:
-    """Large neighbourhood search over time windows of the best schedule (module docstring)."""
+    """Large neighbourhood search over time windows of the bracket's best schedule (module
+    docstring): windows of ``length`` steps to start with, each given ``budget`` seconds to
+    start with, re-solved by ``solver`` (a back end's name); ``swap`` lets interchangeable robots
+    end in each other's places. Shorter schedules are offered to ``bracket``, and the whole
+    schedule's window proves bounds there. ``counts``: windows tried, shortened (swapped),
+    proved not to shorten, undecided; ``proved_bound`` once the whole schedule's window proved one."""
 
-    def __init__(self, run) -> None:
-        self.run = run
-        self.length = run.window
+    def __init__(self, instance: Instance, bracket: Bracket, solver: str, length: int, budget: float, swap: bool,
+                 end: float) -> None:
+        self.instance, self.bracket, self.solver, self.swap, self.end = instance, bracket, solver, swap, end
+        self.length = length
+        self.budget = budget  # seconds per window: grows by half after an undecided one
         self.done: set = set()  # (schedule key, a, b) proved not to shorten
         self.cursor = 0
-        self.budget = run.slice  # seconds per window: grows by half after an undecided one
+        self.counts = {"tried": 0, "shortened": 0, "swapped": 0, "not_shorter": 0, "undecided": 0}
 
     def windows(self, makespan: int) -> list[tuple[int, int]]:
         w = min(self.length, makespan)
@@ -38,9 +46,9 @@ class Windows:
         return out
 
     def step(self, until: float) -> None:
-        run = self.run
-        while time.perf_counter() < until and not run.closed():
-            best = run.best
+        bracket = self.bracket
+        while time.perf_counter() < until and not bracket.closed:
+            best = bracket.best
             key = best.ids.tobytes()
             todo = [(a, b) for a, b in self.windows(best.makespan) if (key, a, b) not in self.done]
             if not todo:  # every window of this length proved; the whole schedule's closes the run
@@ -48,7 +56,7 @@ class Windows:
                 continue
             a, b = todo[self.cursor % len(todo)]
             self.cursor += 1
-            status = self.shorten(best, a, b, min(run.end, time.perf_counter() + self.budget))
+            status = self.shorten(best, a, b, min(self.end, time.perf_counter() + self.budget))
             if status == UNSAT:
                 self.done.add((key, a, b))
             elif status == UNKNOWN:
@@ -57,13 +65,12 @@ class Windows:
     def _proved(self, bound: int) -> str:
         """The window over the whole schedule is the exact search from the start to the goal: no
         schedule shorter than ``bound`` in it means none at all, a lower bound of its own."""
-        self.run.stats["windows"]["proved_bound"] = bound
-        self.run.raise_lower(bound)
+        self.counts["proved_bound"] = bound
+        self.bracket.prove(bound)
         return UNSAT
 
     def shorten(self, best: Incumbent, a: int, b: int, until: float) -> str:
-        run, inst = self.run, self.run.instance
-        counts = run.stats["windows"]
+        inst, counts = self.instance, self.counts
         counts["tried"] += 1
         states = [inst.start_state] + list(run_states(inst, best.ids))
         sub = instance_at(inst, states[a], f"{inst.name}[{a}:{b}]")
@@ -77,11 +84,11 @@ class Windows:
         if L < 1:
             return self._proved(best.makespan) if whole else UNSAT
         try:
-            model = build(sub, L, Options(), min_done=1, deadline=until, end=end, swap=run.swap)
+            model = build(sub, L, Options(), min_done=1, deadline=until, end=end, swap=self.swap)
         except OutOfTime:
             counts["undecided"] += 1
             return UNKNOWN
-        found = shortest_part(model, sub, L, until, run.solver)
+        found = shortest_part(model, sub, L, until, self.solver)
         if isinstance(found, str):
             counts["undecided" if found == UNKNOWN else "not_shorter"] += 1
             return self._proved(best.makespan) if found == UNSAT and whole else found
@@ -91,7 +98,7 @@ class Windows:
         # robot i goes on with the rest of the schedule of the robot whose end state it took
         ids = np.concatenate([best.ids[:, :a], part[:, :k], best.ids[roles, b:]], axis=1)
         spliced = from_schedule(inst, Schedule.from_ids(inst, ids), "anytime")
-        if spliced is not None and run.improve(spliced):
+        if spliced is not None and self.bracket.offer(spliced):
             counts["shortened"] += 1
             counts["swapped"] += roles != list(range(inst.num_robots))
         return SAT

@@ -6,7 +6,7 @@ import json
 import numpy as np
 import pytest
 
-from bille.instances import load_instance
+from bille.instances import OptionError, load_instance
 from bille.instances.bundled import bundled_path
 from bille.instances.moveset import Kind
 from bille.instances.schedule import Schedule, bind, save_schedule
@@ -50,13 +50,27 @@ def test_anytime_proves_the_brute_force_optimum(k, parallel, bound_solver):
     assert seen and all(e["lower"] <= optimum for e in seen)
 
 
+def test_subscribers_hear_every_schedule_and_bound_and_a_bad_one_is_refused():
+    inst = SOLVABLE[5]
+    schedules, bounds = [], []
+    result = solve(inst, "anytime", time_limit=60, parallel=False, on_schedule=schedules.append,
+                   on_bound=bounds.append)
+    assert result.status == "optimal" and validate(inst, result.schedule).valid
+    assert [found.makespan for found in schedules] == [m for _, m in result.stats["improvements"]]
+    assert bounds == [b for _, b in result.stats["lower_bounds"]] and bounds[-1] == OPTIMA[inst]
+    for found in schedules:
+        assert validate(inst, Schedule.from_ids(inst, found.ids)).metrics.makespan == found.makespan
+    with pytest.raises(OptionError, match="on_bound must be a function"):
+        solve(inst, "anytime", on_bound=3)
+
+
 @pytest.mark.parametrize("solver", ["minisat22", "cpsat"])
 @pytest.mark.parametrize("k", range(3))
 def test_the_whole_schedules_window_proves_the_optimum_without_the_bound_search(monkeypatch, k, solver):
     """With the bound search switched off, only the windows can raise the bound: the window that
     spans the whole schedule is the exact search from the start to the goal, so the shortest
     schedule it proves (or its proof that none is shorter) is the optimum."""
-    monkeypatch.setattr(anytime._Rise, "step", lambda self, until: None)
+    monkeypatch.setattr(anytime.Rise, "step", lambda self, until: None)
     below = [inst for inst in SOLVABLE if anytime.lower_bound(inst).lower < OPTIMA[inst]]
     inst = below[k]
     optimum = OPTIMA[inst]
@@ -79,7 +93,7 @@ def _padded(inst, schedule, waits):
 def test_the_whole_schedules_window_proves_the_shortest_schedule_it_finds(monkeypatch, solver):
     """A padded optimal schedule, one window over all of it: the call that finds the optimum also
     proves that nothing is shorter, so one window closes the run."""
-    monkeypatch.setattr(anytime._Rise, "step", lambda self, until: None)
+    monkeypatch.setattr(anytime.Rise, "step", lambda self, until: None)
     inst = next(inst for inst in SOLVABLE if anytime.lower_bound(inst).lower < OPTIMA[inst])
     optimal = solve(inst, "sat", minimize_travel=False)
     padded = _padded(inst, optimal.schedule, 3)
@@ -94,7 +108,7 @@ def test_the_whole_schedules_window_proves_the_shortest_schedule_it_finds(monkey
 def test_a_whole_window_shortened_to_one_step_proves_it(monkeypatch, solver):
     """A part of one step is the shortest there is: the window over the whole schedule proves
     the bound 1 with either kind of solver."""
-    monkeypatch.setattr(anytime._Rise, "step", lambda self, until: None)
+    monkeypatch.setattr(anytime.Rise, "step", lambda self, until: None)
     inst = make("TTT", [{"at": [0, 0]}], moveset="point", robot_goals=[[1, 0]])
     late = sched("wait east")
     result = solve(inst, "anytime", time_limit=30, parallel=False, incumbent=late, solver=solver, window=64)
@@ -106,7 +120,7 @@ def test_a_whole_window_shortened_to_one_step_proves_it(monkeypatch, solver):
 @pytest.mark.slow
 @pytest.mark.parametrize("solver", ["minisat22", "glucose42", "cpsat"])
 def test_the_windows_shorten_a_padded_schedule_to_the_optimum(monkeypatch, solver):
-    monkeypatch.setattr(anytime._Rise, "step", lambda self, until: None)  # no bound search: windows only
+    monkeypatch.setattr(anytime.Rise, "step", lambda self, until: None)  # no bound search: windows only
     inst = load_instance(bundled_path("corridor-2"))
     optimal = solve(inst, "sat", minimize_travel=False)
     padded = _padded(inst, optimal.schedule, 5)
@@ -130,7 +144,7 @@ def test_an_impossible_instance_is_infeasible_with_no_bound():
 def test_with_no_schedule_from_the_heuristics_the_complete_planner_gives_one(monkeypatch):
     monkeypatch.setattr(anytime, "first_schedule", lambda *args, **kw: None)
     monkeypatch.setattr(anytime, "fewer_robots", lambda *args, **kw: None)
-    monkeypatch.setattr(anytime._Rise, "step", lambda self, until: None)  # no bound search
+    monkeypatch.setattr(anytime.Rise, "step", lambda self, until: None)  # no bound search
     inst = SOLVABLE[0]
     result = solve(inst, "anytime", time_limit=2, parallel=False)
     assert result.stats["first"]["method"] in ("lacam", "lacam-states"), result.stats
@@ -186,7 +200,7 @@ def test_a_first_run_cut_short_gives_the_first_schedule_with_more_time(monkeypat
     monkeypatch.setattr(anytime, "first_schedule", first)
     monkeypatch.setattr(anytime, "fewer_robots", lambda *args, **kw: None)
     monkeypatch.setattr(anytime, "complete_search", lambda *args, **kw: pytest.fail("not needed"))
-    monkeypatch.setattr(anytime._Rise, "step", lambda self, until: None)  # no bound search
+    monkeypatch.setattr(anytime.Rise, "step", lambda self, until: None)  # no bound search
     inst = load_instance(bundled_path("reconfig-30"))
     result = solve(inst, "anytime", time_limit=3, parallel=False)
     assert result.stats["first"]["method"] == "late" and calls[0] == ("late", 2.0)
@@ -196,7 +210,7 @@ def test_a_first_run_cut_short_gives_the_first_schedule_with_more_time(monkeypat
 @pytest.mark.slow
 def test_with_no_schedule_from_every_robot_the_loop_with_fewer_gives_one(monkeypatch):
     monkeypatch.setattr(anytime, "first_schedule", lambda *args, **kw: None)
-    monkeypatch.setattr(anytime._Rise, "step", lambda self, until: None)  # no bound search
+    monkeypatch.setattr(anytime.Rise, "step", lambda self, until: None)  # no bound search
     monkeypatch.setattr(anytime, "complete_search", lambda *args, **kw: pytest.fail("not needed"))
     inst = load_instance(bundled_path("reconfig-30"))
     result = solve(inst, "anytime", time_limit=5, parallel=False)
