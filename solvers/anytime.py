@@ -41,6 +41,7 @@ proved it optimal), and the seconds spent on each search.
 """
 from __future__ import annotations
 
+import multiprocessing
 import time
 from typing import Callable
 
@@ -73,7 +74,8 @@ def plan(instance: Instance, *, time_limit: float = 60.0, window: int = 8, slice
         again); without ``parallel``, also the seconds each search runs before the other takes its
         turn (default 2).
     parallel : raise the bound in a child process, on a second core, while the parent searches
-        windows (default; where the platform cannot fork, the two take turns).
+        windows (default; where the platform cannot fork, or in a daemonic process, which may not
+        start one, the two take turns). ``stats.bound_search`` says which.
     solver : the neighbourhood search's solver: a python-sat name (default ``minisat22``: on the
         lt maps it reaches the same schedules as ``glucose42`` sooner, both decide more windows
         than ``cadical195``, and it stops at its deadline) or ``cpsat`` (one worker, the part's
@@ -141,7 +143,9 @@ class _Anytime:
             bracket.best, bracket.lower = Incumbent(np.zeros((inst.num_robots, 0), np.int64), 0, "none"), 0
             return self.result("optimal")
         first = self._given(given)
-        background = self.parallel and FORK is not None
+        why = self._in_turns()
+        background = why is None
+        self.stats["bound_search"] = "child process" if background else f"in turns: {why}"
         # the bound search starts at once, beside the heuristics
         rise = Background(inst, self.bound_solver, bracket, self.end) if background else None
         try:
@@ -174,6 +178,18 @@ class _Anytime:
         if bracket.best is None:
             return self.result("timeout")
         return self.result("optimal" if bracket.closed else "feasible")
+
+    def _in_turns(self) -> str | None:
+        """Why the bound search takes turns with the rest instead of running in a child process
+        (None: it runs there). A daemonic process (a worker of a pool, of a sweep) may not start
+        children, so there the two searches take turns."""
+        if not self.parallel:
+            return "parallel is off"
+        if FORK is None:
+            return "this platform cannot fork"
+        if multiprocessing.current_process().daemon:
+            return "a daemonic process cannot start a child"
+        return None
 
     def _given(self, given: Schedule | None) -> Incumbent | None:
         """The schedule given to start from, checked by the validator (None if none was given)."""

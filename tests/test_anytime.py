@@ -81,6 +81,34 @@ def test_the_whole_schedules_window_proves_the_optimum_without_the_bound_search(
     _monotone(result.stats, optimum)
 
 
+def _solve_and_send(inst, outbox):
+    try:
+        result = solve(inst, "anytime", time_limit=60)
+        outbox.send(("done", result.status, result.stats.get("bound_search"), bind(inst, result.schedule).tolist()))
+    except BaseException as e:  # what went wrong, for the test to show
+        outbox.send(("error", repr(e), None, None))
+
+
+def test_in_a_daemonic_process_the_two_searches_take_turns():
+    """A daemonic process (a pool's worker, a sweep's run) may not start a child: the bound
+    search then takes turns with the rest, and says so."""
+    import multiprocessing
+
+    inst = SOLVABLE[3]
+    fork = multiprocessing.get_context("fork")
+    inbox, outbox = fork.Pipe(duplex=False)
+    worker = fork.Process(target=_solve_and_send, args=(inst, outbox), daemon=True)
+    worker.start()
+    assert inbox.poll(120), "the daemonic process sent nothing"
+    kind, status, how, ids = inbox.recv()
+    worker.join()
+    assert kind == "done", status
+    assert status == "optimal" and how == "in turns: a daemonic process cannot start a child"
+    schedule = Schedule.from_ids(inst, np.array(ids, dtype=np.int64))
+    assert validate(inst, schedule).metrics.makespan == OPTIMA[inst]
+    assert solve(inst, "anytime", time_limit=60).stats["bound_search"] == "child process"
+
+
 def _padded(inst, schedule, waits):
     """The schedule with ``waits`` joint waits inserted after its first step."""
     ids = bind(inst, schedule)
