@@ -4,14 +4,19 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from bille.heuristics.reconfigure import Leg, Loop, plan
+from bille.heuristics.allocation import Allocation
+from bille.heuristics.goals import Goals
+from bille.heuristics.manipulation import Manipulation
+from bille.heuristics.motion import MOTIONS, TemporalAStar
+from bille.heuristics.reconfigure import Leg, Loop, LoopState, plan
+from bille.heuristics.transfer import LoadTransfer
 from bille.heuristics.sequence import NoSequence, SequenceError, check, derive, sequence_of
 from bille.instances import OptionError, instance_from_text, load_instance
 from bille.instances.bundled import bundled_path
 from bille.instances.generators.random import random_reconfiguration
 from bille.instances.grid import is_connected
 from bille.instances.moveset import Kind
-from bille.instances.rules import State
+from bille.instances.rules import State, apply
 from bille.instances.schedule import Schedule
 from bille.solvers import solve, validate
 from helpers import make, manipulations
@@ -184,85 +189,160 @@ def test_swapping_drop_offs_shortens_tiles_going_both_ways():
     assert on.metrics.makespan < off.metrics.makespan and on.metrics.tiles_traveled < off.metrics.tiles_traveled
 
 
-# ---- the parts -----------------------------------------------------------------------------------
+# ---- the parts, each given a state ---------------------------------------------------------------
 
-def _carriers_on_the_bridge(to0, to1, d_tr=5):
+def _state(inst, poses, carrying, legs, jobs=()):
+    """A loop state with the instance's start tiles and no job left to hand out but ``jobs``."""
+    return LoopState(inst.world, State(inst.start.tiles, tuple(poses), tuple(carrying)), legs, list(jobs), 0,
+                     list(range(inst.num_robots)))
+
+
+def _carriers_on_the_bridge(to0, to1):
     """lt-4 with robot 0 on the bridge heading east and robot 1 three cells east of it heading
     west, both carrying; robot 0 drops at ``to0``, robot 1 at ``to1``."""
     inst = bundled("lt-4")
-    loop = Loop(inst, load_transfer=True, d_tr=d_tr)
     g = inst.world.graphs[0]
     poses = (g.pose_of((8, 3), (7, 3)), g.pose_of((11, 3), (12, 3)))
-    loop.state = State(inst.start.tiles, poses, (True, True))
-    loop.next_job = len(loop.jobs)
-    loop.legs = [[Leg(Kind.PLACE, cell(inst, *to0), 0)], [Leg(Kind.PLACE, cell(inst, *to1), 1)]]
-    return loop
+    legs = [[Leg(Kind.PLACE, cell(inst, *to0), 0)], [Leg(Kind.PLACE, cell(inst, *to1), 1)]]
+    return inst, _state(inst, poses, (True, True), legs)
 
 
 def test_the_swap_fires_when_the_drop_offs_lie_past_each_other():
-    loop = _carriers_on_the_bridge((17, 1), (0, 2))
-    chosen = loop.transfers()
+    inst, s = _carriers_on_the_bridge((17, 1), (0, 2))
+    chosen = LoadTransfer(inst).decide(s)
     assert [t.kind for t in chosen] == ["swap"] and chosen[0].saving > 0
-    assert [loop.world.xy(legs[0].cell) for legs in loop.legs] == [(0, 2), (17, 1)]
+    assert [inst.world.xy(legs[0].cell) for legs in s.legs] == [(17, 1), (0, 2)]  # a decision, not applied
+    s.transfer(chosen[0])
+    assert [inst.world.xy(legs[0].cell) for legs in s.legs] == [(0, 2), (17, 1)]
 
 
 def test_the_swap_does_not_fire_when_each_drop_off_is_on_its_own_side():
-    loop = _carriers_on_the_bridge((0, 2), (17, 1))
-    assert loop.transfers() == []
-    assert [loop.world.xy(legs[0].cell) for legs in loop.legs] == [(0, 2), (17, 1)]
+    inst, s = _carriers_on_the_bridge((0, 2), (17, 1))
+    assert LoadTransfer(inst).decide(s) == []
 
 
 def test_d_tr_limits_the_pairs_considered():
-    far = _carriers_on_the_bridge((17, 1), (0, 2), d_tr=2)  # the robots are 3 apart
-    assert far.transfers() == [] and far.stats["pairs_considered"] == 0
-    near = _carriers_on_the_bridge((17, 1), (0, 2), d_tr=3)
-    assert near.transfers() and near.stats["pairs_considered"] == 1
+    inst, s = _carriers_on_the_bridge((17, 1), (0, 2))  # the robots are 3 apart
+    far, near = LoadTransfer(inst, d_tr=2), LoadTransfer(inst, d_tr=3)
+    assert far.decide(s) == [] and far.stats["pairs_considered"] == 0
+    assert near.decide(s) and near.stats["pairs_considered"] == 1
+
+
+def _relay_on_lt1():
+    # robot 0 carries east, about to leave the west platform; robot 1 comes west over the bridge
+    # to pick a tile of the west platform: they cannot pass each other on the bridge
+    inst = bundled("lt-1")
+    g = inst.world.graphs[0]
+    x1, x2, a2 = cell(inst, 15, 1), cell(inst, 1, 2), cell(inst, 15, 2)
+    legs = [[Leg(Kind.PLACE, x1, 0)], [Leg(Kind.PICK, x2, 1), Leg(Kind.PLACE, a2, 1)]]
+    return inst, _state(inst, (g.pose_of((4, 2), (3, 2)), g.pose_of((6, 3), (7, 3))), (True, False), legs)
 
 
 def test_a_relay_hands_the_jobs_over():
-    inst = bundled("lt-1")
-    loop = Loop(inst, load_transfer=True)
-    g = inst.world.graphs[0]
-    # robot 0 carries east, about to leave the west platform; robot 1 comes west over the bridge
-    # to pick a tile of the west platform: they cannot pass each other on the bridge
-    loop.state = State(inst.start.tiles, (g.pose_of((4, 2), (3, 2)), g.pose_of((6, 3), (7, 3))), (True, False))
-    loop.next_job = len(loop.jobs)
-    x1, x2, a2 = cell(inst, 15, 1), cell(inst, 1, 2), cell(inst, 15, 2)
-    loop.legs = [[Leg(Kind.PLACE, x1, 0)], [Leg(Kind.PICK, x2, 1), Leg(Kind.PLACE, a2, 1)]]
-    (t,) = loop.transfers()
+    inst, s = _relay_on_lt1()
+    x1, x2, a2 = (leg.cell for leg in s.legs[0] + s.legs[1])
+    part = LoadTransfer(inst)
+    (t,) = part.decide(s)
     assert t.kind == "relay" and t.giver == 0 and t.taker == 1
-    assert [(leg.kind, leg.cell) for leg in loop.legs[0]] == [(Kind.PLACE, t.cell), (Kind.PICK, x2), (Kind.PLACE, a2)]
-    assert [(leg.kind, leg.cell) for leg in loop.legs[1]] == [(Kind.PICK, t.cell), (Kind.PLACE, x1)]
-    assert loop.legs[0][0].relay and loop.legs[1][0].relay
-    assert loop.transfers() == []  # robots in the middle of a relay are left alone
+    s.transfer(t)
+    assert [(leg.kind, leg.cell) for leg in s.legs[0]] == [(Kind.PLACE, t.cell), (Kind.PICK, x2), (Kind.PLACE, a2)]
+    assert [(leg.kind, leg.cell) for leg in s.legs[1]] == [(Kind.PICK, t.cell), (Kind.PLACE, x1)]
+    assert s.legs[0][0].relay and s.legs[1][0].relay
+    assert part.decide(s) == []  # robots in the middle of a relay are left alone
+
+
+def test_a_backtrack_restores_the_state_and_never_makes_the_transfer_again():
+    inst, s = _relay_on_lt1()
+    part = LoadTransfer(inst)
+    chosen = part.decide(s)
+    assert not part.can_backtrack()
+    part.remember(s, {"seen"}, {"relays": 0}, chosen)
+    s.transfer(chosen[0])
+    before, seen, counts = part.backtrack()
+    assert [[leg.cell for leg in legs] for legs in before.legs] == [[cell(inst, 15, 1)], [cell(inst, 1, 2), cell(inst, 15, 2)]]
+    assert seen == {"seen"} and counts == {"relays": 0} and part.stats["backtracks"] == 1
+    assert chosen[0] not in part.decide(before) and not part.can_backtrack()
 
 
 def test_a_pick_that_would_disconnect_waits():
     inst = bundled("lt-1")
-    loop = Loop(inst)
     g = inst.world.graphs[0]
-    loop.next_job = len(loop.jobs)
+    start = LoopState.start(inst, sequence_of(inst), [0, 1])
+    part = Manipulation(inst, start)
+    goals = Goals(inst, part)
     bridge = cell(inst, 5, 3)  # the first bridge tile: picking it splits the structure
-    loop.state = State(inst.start.tiles, (g.pose_of((4, 3), (3, 3)), g.pose_of((13, 1), (14, 1))), (False, False))
-    loop.legs = [[Leg(Kind.PICK, bridge, 0), Leg(Kind.PLACE, cell(inst, 15, 1), 0)], []]
-    assert loop.manipulations() == ({}, {})
-    assert loop.stats["deferred_manipulations"] == 1 and 0 not in loop.ready()
-    assert loop.goal(0) is None  # it gives way meanwhile
+    legs = [[Leg(Kind.PICK, bridge, 0), Leg(Kind.PLACE, cell(inst, 15, 1), 0)], []]
+    s = _state(inst, (g.pose_of((4, 3), (3, 3)), g.pose_of((13, 1), (14, 1))), (False, False), legs)
+    assert part.decide(s) == ({}, {})
+    assert part.stats["deferred_manipulations"] == 1 and 0 not in part.ready(s)
+    assert goals.of(s, 0) is None  # it gives way meanwhile
     # the same robot facing a tile of the outer column picks it at once
-    loop.state = State(inst.start.tiles, (g.pose_of((2, 1), (3, 1)), loop.state.poses[1]), (False, False))
-    loop.legs = [[Leg(Kind.PICK, cell(inst, 1, 1), 0), Leg(Kind.PLACE, cell(inst, 15, 1), 0)], []]
-    fixed, _ = loop.manipulations()
+    legs = [[Leg(Kind.PICK, cell(inst, 1, 1), 0), Leg(Kind.PLACE, cell(inst, 15, 1), 0)], []]
+    s = _state(inst, (g.pose_of((2, 1), (3, 1)), s.poses[1]), (False, False), legs)
+    fixed, _ = part.decide(s)
     assert list(fixed) == [0] and g.kind[fixed[0]] == Kind.PICK
+    assert s.state.tiles[cell(inst, 1, 1)]  # a decision: the state is the loop's to change
 
 
 def test_allocation_gives_the_next_job_to_the_nearest_idle_robot():
     inst = bundled("lt-3")  # both robots start east; the first pick is on the west platform
-    loop = Loop(inst)
-    loop.allocate()
-    first = loop.jobs[0].pick
-    dists = [int(loop.walk(i).facing_distances(first)[p]) for i, p in enumerate(loop.state.poses)]
+    s = LoopState.start(inst, sequence_of(inst), [0, 1])
+    decided = Allocation([0, 1]).decide(s)
+    first = s.jobs[0].pick
+    dists = [int(s.walk(i).facing_distances(first)[p]) for i, p in enumerate(s.poses)]
     nearest = int(np.argmin(dists))
-    assert loop.legs[nearest][0].cell == first and loop.next_job == 2
+    assert decided == [(nearest, 0), (1 - nearest, 1)] and s.next_job == 0
+    assert Allocation([1 - nearest]).decide(s) == [(1 - nearest, 0)]  # only the active robots take jobs
+    for robot, k in decided:
+        s.assign(robot, k)
+    assert s.legs[nearest][0].cell == first and s.next_job == 2
+    assert Allocation([0, 1]).decide(s) == []  # no robot is idle
+
+
+def test_a_goal_is_named_by_what_it_means():
+    inst = bundled("lt-3")
+    s = LoopState.start(inst, sequence_of(inst), [0, 1])
+    s.assign(0, 0)
+    goals = Goals(inst, Manipulation(inst, s))
+    goal = goals.of(s, 0)
+    assert goal.key[-1] == ("pick", s.jobs[0].pick, s.jobs[0].place)
+    assert goal.dist[s.poses[0]] == int(s.walk(0).facing_distances(s.jobs[0].pick)[s.poses[0]])
+    # the same tiles in another array: the same goal, its plain lists made once
+    again = LoopState(inst.world, State(s.state.tiles.copy(), s.poses, s.state.carrying), s.legs, s.jobs, s.next_job)
+    assert goals.of(again, 0) is goal and goal.lists[0] == goal.dist.tolist()
+
+
+@pytest.mark.parametrize("name", sorted(MOTIONS))
+def test_a_motion_layer_alone_plans_a_step_the_rules_accept(name):
+    inst = bundled("lt-1")
+    s = LoopState.start(inst, sequence_of(inst), [0, 1])
+    for robot, k in Allocation([0, 1]).decide(s):
+        s.assign(robot, k)
+    stats = {k: 0 for k in ("priority_shifts", "replans", "cautious_steps", "expanded", "goals_dropped")}
+    layer = MOTIONS[name](epsilon=1.0, horizon=5)
+    layer.start(inst, stats)
+    goals = Goals(inst, Manipulation(inst, s), parking=layer.parking).all(s)
+    assert layer.name == name and all(g is not None for g in goals)
+    joint = layer.step(s, {}, goals, {}, None)
+    after = apply(inst.world, s.state, joint, step=1)
+    assert isinstance(after, State) and after.poses != s.poses  # someone moved towards a pick
+    assert sum(g.dist[p] for g, p in zip(goals, after.poses)) < sum(g.dist[p] for g, p in zip(goals, s.poses))
+
+
+def test_a_motion_layer_given_as_an_object_runs_the_loop():
+    inst = bundled("reconfig-30")
+    calls = []
+
+    class Counting(TemporalAStar):
+        def step(self, s, fixed, goals, intents, deadline):
+            calls.append(len(s.steps))
+            return super().step(s, fixed, goals, intents, deadline)
+
+    by_name = plan(inst, motion="temporal-astar", horizon=10)
+    given = plan(inst, motion=Counting(horizon=10))
+    assert given.status == by_name.status == "feasible" and given.schedule == by_name.schedule
+    assert given.method == "temporal-astar" and calls == list(range(len(calls))) and len(calls) > 0
+    assert validate(inst, given.schedule).valid
 
 
 def test_a_transfer_that_leads_into_a_deadlock_is_undone():
@@ -280,7 +360,7 @@ def test_an_early_pick_keeps_the_tile_a_later_place_stands_on():
     inst = random_reconfiguration(15, 15, 60, 2, 10, seed=2)
     loop = Loop(inst, horizon=10)
     w = inst.width
-    assert [(j.pick % w, j.pick // w, j.place % w, j.place // w) for j in loop.jobs[5:7]] == [
+    assert [(j.pick % w, j.pick // w, j.place % w, j.place // w) for j in loop.s.jobs[5:7]] == [
         (6, 8, 11, 8), (9, 8, 12, 8)]
     result = loop.run("temporal-astar")
     assert result.status == "feasible"
