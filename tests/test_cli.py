@@ -65,7 +65,7 @@ def test_show_draws_robots_and_reports_validity(capsys):
 
 
 def test_show_marks_an_invalid_instance(tmp_path, capsys):
-    text = (DATA / "line.yaml").read_text().replace("TTTTTT", "TT.TTT").replace("front: [1, 1], back: [0, 1]", "front: [1, 1], back: [0, 1]")
+    text = (DATA / "line.yaml").read_text().replace("TTTTTT", "TT.TTT")
     (tmp_path / "split.yaml").write_text(text)
     code, out, _ = run(capsys, "show", str(tmp_path / "split.yaml"))
     assert code == 1 and "INVALID" in out and "not 4-connected" in out

@@ -52,3 +52,21 @@ def test_the_import_graph_of_a_command():
     assert ("bille.tools.cli", "bille.tools.files_commands") in g["edges"]
     assert all(a in g["modules"] and b in g["modules"] for a, b in g["edges"])
     assert all((a, b) in g["edges"] and (b, a) in g["edges"] for a, b in g["both_ways"])
+
+
+def test_a_bille_folder_earlier_on_the_path_does_not_hide_the_installed_package(tmp_path):
+    # Python run from the repository's root meets its bille/ folder first; a non-editable install
+    # holds the layers in site-packages/bille (here: a second folder, without site-packages)
+    from pathlib import Path
+
+    top = (Path(__file__).resolve().parent.parent / "bille" / "__init__.py").read_text()
+    first, installed = tmp_path / "root" / "bille", tmp_path / "site" / "bille"
+    for folder in (first, installed / "instances"):
+        folder.mkdir(parents=True)
+    (first / "__init__.py").write_text(top)
+    (installed / "__init__.py").write_text(top)
+    (installed / "instances" / "__init__.py").write_text("FOUND = True\n")
+    code = (f"import sys; sys.path[:0] = [{str(first.parent)!r}, {str(installed.parent)!r}]; "
+            "import bille.instances; print(bille.instances.FOUND)")
+    done = subprocess.run([sys.executable, "-S", "-c", code], capture_output=True, text=True)
+    assert done.stdout.strip() == "True", done.stderr
