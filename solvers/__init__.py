@@ -29,8 +29,9 @@ _clock = _time.perf_counter  # the clock of solve()'s time limit (a test may rep
 _INTERNAL = ("bounds", "progress")  # handed to a method by solve(), never given as options
 
 
-def solve(instance: Instance, method: str, progress=None, *, bound: bool = False, **options) -> Result:
-    """Solve ``instance`` with ``method`` (a key of :data:`METHODS`).
+def solve(instance: Instance, method: str = "auto", progress=None, *, bound: bool = False, **options) -> Result:
+    """Solve ``instance`` with ``method`` (a key of :data:`METHODS`; ``auto`` picks one by the
+    instance, :mod:`.auto`).
 
     Options are checked by type and range first (:mod:`.options`). ``progress``, a callable, is
     handed to the methods that report progress (``anytime``; see its docstring), and told the

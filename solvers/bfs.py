@@ -32,7 +32,8 @@ def plan(instance: Instance, *, time_limit: float | None = None, max_steps: int 
     max_states : give up (status ``unsolved``) after storing this many states.
 
     Whenever it stops, every state within the depth reached has been checked, so the lower bound
-    it reports (that depth + 1) is proved.
+    it reports (that depth + 1) is proved. Interrupted (Ctrl-C), the level under way may not all
+    be checked: status ``interrupted`` with the depth reached as the bound.
     """
     if max_steps < 0 or max_states < 1:
         raise OptionError("bfs: max_steps must be >= 0 and max_states >= 1")
@@ -59,33 +60,37 @@ def plan(instance: Instance, *, time_limit: float | None = None, max_steps: int 
                       stats=stats("time limit" if out_of_time else "state cap"),
                       time_s=time.perf_counter() - start)
 
-    while frontier:
-        for s in frontier:
-            if goal_violation(world, s, goal_tiles, goal_cells, depth) is None:
-                schedule = _unwind(instance, parent, s)
-                return Result("bfs", "optimal", schedule, lower_bound=depth, stats=stats(),
-                              time_s=time.perf_counter() - start)
-        if depth == max_steps:
-            truncated = True
-            break
-        nxt = []
-        for s in frontier:
-            if (end := stopped()) is not None:
-                return end
-            expanded += 1
-            options = [candidate_actions(instance, s, i) for i in range(instance.num_robots)]
-            joints = product(*options) if world.classic else disjoint_products(instance, s, options)
-            for n, joint in enumerate(joints, 1):
-                if n % CHECK_EVERY == 0 and (end := stopped()) is not None:
-                    return end  # many robots: one state has millions of joint actions
-                new = apply(world, s, joint)
-                if isinstance(new, State):
-                    key = new.key()
-                    if key not in parent:
-                        parent[key] = (s.key(), joint)
-                        nxt.append(new)
-        frontier = nxt
-        depth += 1
+    try:
+        while frontier:
+            for s in frontier:
+                if goal_violation(world, s, goal_tiles, goal_cells, depth) is None:
+                    schedule = _unwind(instance, parent, s)
+                    return Result("bfs", "optimal", schedule, lower_bound=depth, stats=stats(),
+                                  time_s=time.perf_counter() - start)
+            if depth == max_steps:
+                truncated = True
+                break
+            nxt = []
+            for s in frontier:
+                if (end := stopped()) is not None:
+                    return end
+                expanded += 1
+                options = [candidate_actions(instance, s, i) for i in range(instance.num_robots)]
+                joints = product(*options) if world.classic else disjoint_products(instance, s, options)
+                for n, joint in enumerate(joints, 1):
+                    if n % CHECK_EVERY == 0 and (end := stopped()) is not None:
+                        return end  # many robots: one state has millions of joint actions
+                    new = apply(world, s, joint)
+                    if isinstance(new, State):
+                        key = new.key()
+                        if key not in parent:
+                            parent[key] = (s.key(), joint)
+                            nxt.append(new)
+            frontier = nxt
+            depth += 1
+    except KeyboardInterrupt:  # every level above the one under way was checked: a proved bound
+        return Result("bfs", "interrupted", lower_bound=depth, stats=stats("interrupted"),
+                      time_s=time.perf_counter() - start)
     if truncated:  # no goal within max_steps
         return Result("bfs", "unsolved", lower_bound=max_steps + 1, stats=stats("step bound"),
                       time_s=time.perf_counter() - start)

@@ -128,8 +128,8 @@ def test_bad_tasks_exit_2_on_the_command_line(case, tmp_path, capsys):
     path = tmp_path / "bad.yaml"
     path.write_text(f"name: bad\nmoveset: point\ngrid: |\n  .....\n  TTTT.\ngoal: |\n  .....\n  .TTTT\n"
                     f"robots: [{{at: [3, 1]}}]\ntasks:\n  - {task}\n")
-    for command in ("plan-sequence", "solve"):
-        code, out, err = cli(capsys, command, str(path))
+    for command in (["plan-sequence"], ["solve", "-m", "temporal-astar"]):  # the loop reads the tasks
+        code, out, err = cli(capsys, *command, str(path))
         assert code == 2 and out == ""
         lines = err.strip().splitlines()
         assert len(lines) == 1 and message in lines[0] and "tasks" in lines[0]
@@ -373,7 +373,7 @@ def test_a_sequence_the_loop_cannot_derive_is_unsolved_not_bad_input(capsys, tmp
     path = tmp_path / "hard.yaml"
     path.write_text("name: hard\nmoveset: S7\ngrid: |\n  TTTT.\ngoal: |\n  .TTTT\n"
                     "robots: [{front: [2, 0], back: [3, 0]}]\n")
-    code, out, _ = cli(capsys, "solve", str(path))
+    code, out, _ = cli(capsys, "solve", "-m", "temporal-astar", str(path))
     assert code == 1 and "unsolved" in out
     code, _, err = cli(capsys, "plan-sequence", str(path))
     assert code == 1 and "tile sets they reach were searched" in err

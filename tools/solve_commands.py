@@ -12,7 +12,8 @@ from .common import (EXIT_INTERRUPTED, EXIT_NO, EXIT_OK, LiveLine, exit_code, in
 
 @click.command("solve")
 @click.argument("instance")
-@click.option("--method", "-m", type=click.Choice(list(METHODS)), default="temporal-astar", show_default=True)
+@click.option("--method", "-m", type=click.Choice(list(METHODS)), default="auto", show_default=True,
+              help="auto: the brute force with proof on a small joint state space, anytime solving otherwise.")
 @click.option("--epsilon", type=click.FloatRange(min=1.0), help="Heuristic weight (astar, mstar, temporal-astar).")
 @click.option("--horizon", "-H", type=click.IntRange(min=1), help="Steps planned ahead (temporal-astar).")
 @click.option("--time-limit", type=float, help="Seconds for the whole call, the lower bound included.")
@@ -60,6 +61,8 @@ def solve_(instance: str, method: str, epsilon, horizon, time_limit, threads, lo
         print_json(result.to_json())
         return exit_code(result)
     click.echo(summary_line(method, result))
+    if "auto" in result.stats:
+        click.echo(f"auto chose {result.stats['auto']['method']}: {result.stats['auto']['why']}")
     if "objective" in result.stats:  # what optimal means when it is not the makespan of every schedule
         click.echo(f"objective: {result.stats['objective']}")
     if "restricted_lower_bound" in result.stats:

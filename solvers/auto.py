@@ -1,0 +1,88 @@
+"""``auto``: the method picked by the instance, the default of ``bille solve`` (DESIGN §5).
+
+On a small joint state space the brute force (:mod:`.bfs`) gives the optimum with its proof,
+where the time-expanded model may find nothing (tiny crowded maps with long schedules: a 3x3 map
+with two robots and optimum 36, a 5x4 map with eight tiles and optimum 23); it gets a share of
+the time limit (:data:`BFS_SHARE`), and if it runs out, anytime certified solving (:mod:`.anytime`)
+takes the rest, starting from the depth the brute force proved. Otherwise anytime solving from
+the start (on classic collisions, which anytime does not plan under, LaCAM*).
+
+The size of the joint state space is estimated, not counted (:func:`joint_states`): each robot's
+poses on the start's tiles, with and without a load, times the ways of placing the tiles that
+must move and one more among the free cells (a tile set aside). Measured on random tiny
+instances and the bundled maps (a shared 2-core machine, brute force for 40 s each): every
+instance it finished had an estimate under 10^5 but crowded-3 (3.7 x 10^5 by pose count alone,
+31 s); where it ran out (point-4, compare-2, bridge-2, reconfig-30) the estimate with the tile
+term is 6 x 10^5 and above, so the cut is :data:`SMALL`.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from typing import Callable
+
+import numpy as np
+
+from bille.instances import Instance
+from bille.instances.result import Result
+
+SMALL = 500_000  # estimated joint states up to which the brute force goes first
+BFS_SHARE = 0.5  # of the time limit, at most, for the brute force before anytime takes over
+
+
+def joint_states(instance: Instance) -> int:
+    """An estimate of the joint states the brute force may meet (module docstring)."""
+    tiles = instance.start.tiles
+    poses = 1
+    for graph in instance.world.graphs:
+        feet = graph.feet
+        on_tiles = graph.valid & np.all((feet < 0) | tiles[np.maximum(feet, 0)], axis=1)
+        poses *= 2 * max(1, int(on_tiles.sum()))
+    free = int((~instance.start.obstacles).sum())
+    moving = int((instance.start.tiles & ~instance.goal_tiles).sum()) + int(sum(instance.start_state.carrying))
+    return poses * math.comb(free, min(free, moving + 1))
+
+
+def plan(instance: Instance, *, time_limit: float = 60.0, bounds=None, progress: Callable | None = None) -> Result:
+    """The brute force with proof on a small joint state space, anytime solving otherwise
+    (module docstring); ``stats.auto`` says which method ran and why.
+
+    Parameters
+    ----------
+    time_limit : seconds for the whole run (default 60).
+    bounds, progress : from ``solve()``: the static bound, handed on with what the brute force
+        proved, and the progress callback of the anytime method.
+    """
+    from . import anytime, bfs, registry
+
+    start = time.perf_counter()
+    size = joint_states(instance)
+    fallback = "lacam" if instance.collisions == "classic" else "anytime"
+    if size > SMALL:
+        chosen = {"method": fallback, "why": f"about {size:.1e} joint states, more than {SMALL:.0e}"}
+        lower = None
+    else:
+        share = BFS_SHARE * time_limit
+        found = bfs.plan(instance, time_limit=share)
+        why = f"about {size:,} joint states (at most {SMALL:,}): the brute force, with proof"
+        if found.status not in ("timeout", "unsolved"):
+            return _told(found, {"method": "bfs", "why": why})
+        lower = found.lower_bound
+        chosen = {"method": fallback, "why": f"{why}, ran out of its {share:.0f} s ({found.stats.get('failure')}, "
+                                             f"optimum above {lower - 1} steps); {fallback} with the rest"}
+    left = max(0.01, time_limit - (time.perf_counter() - start))
+    if fallback == "lacam":
+        result = registry.METHODS["lacam"](instance, time_limit=left)
+    else:
+        if bounds is not None and lower is not None and lower > bounds.lower:
+            bounds = dataclasses.replace(bounds, lower=lower, parts={**bounds.parts, "brute force": lower})
+        result = anytime.plan(instance, time_limit=left, bounds=bounds, progress=progress)
+    if lower is not None and result.status != "infeasible" and (result.lower_bound or 0) < lower:
+        result = dataclasses.replace(result, lower_bound=lower)
+    return _told(result, chosen)
+
+
+def _told(result: Result, chosen: dict) -> Result:
+    """The result with ``stats.auto``: the method that ran and why."""
+    return dataclasses.replace(result, stats={"auto": chosen, **result.stats})

@@ -1,0 +1,68 @@
+"""``auto``, the default method: the brute force with proof on a small joint state space, anytime
+solving otherwise, and anytime with the rest of the time when the brute force runs out."""
+from __future__ import annotations
+
+import pytest
+
+from bille.instances import load_instance
+from bille.instances.bundled import bundled_path
+from bille.instances.result import Result
+from bille.solvers import auto, solve, validate
+
+CROWDED = load_instance(bundled_path("crowded-2"))  # about 18,000 joint states: the brute force in a second
+LARGE = load_instance(bundled_path("lt-4"))
+
+
+def test_the_estimate_tells_tiny_maps_from_large_ones():
+    assert auto.joint_states(CROWDED) <= auto.SMALL < auto.joint_states(load_instance(bundled_path("point-4")))
+    assert auto.joint_states(LARGE) > 10**12
+
+
+def test_on_a_small_state_space_the_brute_force_proves_the_optimum():
+    result = solve(CROWDED)  # auto is the default
+    reference = solve(CROWDED, "bfs")
+    assert result.method == "auto" and result.stats["auto"]["method"] == "bfs"
+    assert "joint states" in result.stats["auto"]["why"]
+    assert result.status == "optimal" and validate(CROWDED, result.schedule).valid
+    assert result.metrics.makespan == result.lower_bound == reference.metrics.makespan
+
+
+def test_a_brute_force_out_of_its_share_hands_over_with_its_bound(monkeypatch):
+    shares, handed = [], []
+
+    def out_of_time(instance, *, time_limit=None, **kw):
+        shares.append(time_limit)
+        return Result("bfs", "timeout", lower_bound=9, stats={"failure": "time limit"})
+
+    def anytime(instance, *, time_limit, bounds, progress=None):
+        handed.append((time_limit, bounds.lower, bounds.parts.get("brute force")))
+        return Result("anytime", "timeout", lower_bound=bounds.lower)
+
+    monkeypatch.setattr("bille.solvers.bfs.plan", out_of_time)
+    monkeypatch.setattr("bille.solvers.anytime.plan", anytime)
+    result = solve(CROWDED, "auto", time_limit=20)
+    (share,), ((left, lower, proved),) = shares, handed
+    assert share == pytest.approx(auto.BFS_SHARE * (20 - result.stats["bound_s"]), abs=1e-3)
+    assert 0 < left <= 20 - result.stats["bound_s"] and lower == proved == 9  # crowded-2: a static bound below 9
+    assert result.lower_bound == 9 and result.stats["auto"]["method"] == "anytime"
+    assert "ran out of its" in result.stats["auto"]["why"]
+
+
+def test_on_a_large_state_space_anytime_runs_from_the_start(monkeypatch):
+    handed = []
+
+    def anytime(instance, *, time_limit, bounds, progress=None):
+        handed.append(time_limit)
+        return Result("anytime", "timeout", lower_bound=bounds.lower)
+
+    monkeypatch.setattr("bille.solvers.bfs.plan", lambda *a, **k: (_ for _ in ()).throw(AssertionError("bfs ran")))
+    monkeypatch.setattr("bille.solvers.anytime.plan", anytime)
+    result = solve(LARGE, time_limit=30)
+    assert len(handed) == 1 and result.stats["auto"]["method"] == "anytime"
+    assert "more than" in result.stats["auto"]["why"]
+
+
+def test_the_command_line_says_what_auto_chose(cli, capsys):
+    assert cli(["solve", "crowded-2"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[0].startswith("auto: optimal in ") and out[1].startswith("auto chose bfs: about ")
