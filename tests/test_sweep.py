@@ -263,6 +263,20 @@ def test_gaps_are_measured_against_the_best_bound_of_the_sweep_as_gap_measures_t
     assert [r["certified_gap_percent"] for r in measured] == [0.0, 0.0]
 
 
+def test_gap_measures_the_heuristics_against_auto_by_default(tmp_path, cli, capsys):
+    csv_path = tmp_path / "gap.csv"
+    assert cli(["gap", "crowded-2", "--time-limit", 20, "--csv", csv_path, "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)["rows"]
+    assert [r["method"] for r in rows] == ["auto", "temporal-astar", "mstar", "astar"]
+    optimum = solve(load_instance(bundled_path("crowded-2")), "bfs").metrics.makespan
+    assert rows[0]["status"] == "optimal" and rows[0]["makespan"] == optimum
+    assert all(r["lower_bound"] == optimum for r in rows)  # auto's proof bounds every row
+    from bille.tools.gap import table
+
+    shown = {line.split()[1]: line for line in table(rows)[2:]}
+    assert "optimal (sum of costs)" in shown["mstar"] and "optimal (sum of costs)" in shown["astar"]
+
+
 def test_the_report_says_why_runs_failed(tmp_path):
     from bille.tools.sweep.results import certify
 

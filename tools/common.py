@@ -150,10 +150,14 @@ def output_folder(out: str) -> Path:
 def status_text(result) -> str:
     """The status as the user reads it: ``optimal`` names its objective where it is not the
     makespan (``optimal (sum of costs)``)."""
-    objective = result.stats.get("objective")
-    if result.status == "optimal" and objective:
+    return shown_status(result.status, result.stats.get("objective"))
+
+
+def shown_status(status: str, objective: str | None) -> str:
+    """:func:`status_text` from a status and the objective it is optimal for (None: the makespan)."""
+    if status == "optimal" and objective:
         return f"optimal ({objective.split(', then')[0].split(' (')[0]})"
-    return result.status
+    return status
 
 
 def summary_line(label: str, result) -> str:

@@ -33,9 +33,9 @@ from bille.instances import BilleError, Instance, OptionError
 from bille.solvers import METHODS, solve, validate
 from bille.solvers.options import check_options
 
+from .common import shown_status
 from .tables import text_table
 
-DEFAULT_METHODS = ("temporal-astar", "mstar", "astar", "cpsat", "sat")
 FIELDS = ["instance", "method", "status", "makespan", "own_lower_bound", "lower_bound", "best", "tiles_traveled",
           "time_s", "gap_percent", "certified_gap_percent", "note"]
 ALIASES = {"H": "horizon", "d-tr": "d_tr", "eps": "epsilon"}
@@ -234,7 +234,8 @@ def _percent(makespan: int, base: int) -> float:
 def table(rows: list[dict]) -> list[str]:
     columns = ["instance", "method", "status", "makespan", "LB", "best", "tiles", "time [s]", "gap", "certified",
                "note"]
-    return text_table(columns, [[r["instance"], r["method"], SHOWN_STATUS.get(r["status"], r["status"]),
+    return text_table(columns, [[r["instance"], r["method"],
+                                 SHOWN_STATUS.get(r["status"], shown_status(r["status"], r.get("objective"))),
                                  r["makespan"], r["lower_bound"], r["best"], r["tiles_traveled"],
                                  _show(r["time_s"], "{:.3f}"), _show(r["gap_percent"], "{:+.1f}%"),
                                  _show(r["certified_gap_percent"], "<= {:.1f}%"), _short(r["note"])]
