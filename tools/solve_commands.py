@@ -194,6 +194,6 @@ def gap(instances, methods: tuple[str, ...], schedule_files, time_limit: float, 
             click.echo(line)
         click.echo(f"written to {csv_path}" + (f" and {rrd}" if rrd else ""))
     if interrupted:
-        click.echo(f"bille gap: interrupted; the {len(rows)} rows finished are shown and written", err=True)
+        click.echo(f"bille gap: interrupted; the {len(rows)} rows so far are shown and written", err=True)
         return EXIT_INTERRUPTED
     return EXIT_OK
