@@ -507,3 +507,12 @@ def test_robot_sim_says_what_it_serves(tmp_path):
         proc.wait(10)
         proc.stderr.close()
     assert "robot 'left'" in first and "mqtt://127.0.0.1:1" in first
+
+
+def test_bench_execute_reports_a_fleet_that_is_not_up_in_time_as_a_row(cli, capsys):
+    # robots cannot start within 0.1 s: a result of this machine (exit 1), not bad input (exit 2)
+    assert cli(["bench", "execute", "--robots", "2", "--steps", "2", "--connect-timeout", "0.1",
+                "--step-timeout", "5"]) == 1
+    rows = capsys.readouterr().out.splitlines()[2:]
+    assert [r.split()[:3] for r in rows] == [["1", "not", "measured:"], ["2", "not", "measured:"]]
+    assert "did not answer within 0.1 s" in rows[0]

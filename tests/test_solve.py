@@ -234,3 +234,19 @@ def test_a_long_solve_shows_progress_from_the_start_on_a_terminal_only(as_json):
         assert shown == b"" and json.loads(stdout)["method"] == "cpsat"
     else:  # the bound is shown before the search's first horizon is decided
         assert b"cpsat: makespan lower bound 14, best schedule none yet" in shown
+
+
+def test_a_benchmark_stops_with_the_solve_that_was_stopped(monkeypatch, cli, capsys):
+    solved = []
+
+    def fake(inst, method, **options):
+        if inst.name == "crowded-2":
+            return Result(method, "interrupted")
+        solved.append((inst.name, method))
+        return Result(method, "timeout", lower_bound=5)
+
+    monkeypatch.setattr("bille.tools.bench.anytime.solve", fake)
+    assert cli(["bench", "anytime", "--maps", "corridor-2,crowded-2,point-4", "--time-limit", "1"]) == 130
+    out, err = capsys.readouterr()
+    assert solved == [("corridor-2", "temporal-astar"), ("corridor-2", "anytime")]  # point-4 never started
+    assert "corridor-2" in out and "crowded-2" not in out and "interrupted; 1 of 3 maps measured" in err

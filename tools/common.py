@@ -180,3 +180,11 @@ def exit_code(result) -> int:
     if result.status == "interrupted":
         return EXIT_INTERRUPTED
     return EXIT_OK if result.schedule is not None else EXIT_NO
+
+
+def solved(result):
+    """``result``, or Ctrl-C passed on when the user stopped it (``interrupted``): a loop of
+    solves, such as a benchmark, stops with the solve that was stopped."""
+    if result.status == "interrupted":
+        raise KeyboardInterrupt
+    return result

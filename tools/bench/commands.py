@@ -10,7 +10,7 @@ import click
 
 from bille.instances.bundled import bundled_path
 
-from ..common import EXIT_OK, instance_arg, output_folder
+from ..common import EXIT_INTERRUPTED, EXIT_NO, EXIT_OK, instance_arg, output_folder
 
 
 @click.group()
@@ -37,17 +37,25 @@ def bench_core(size: int, robots: int, steps: int, compile_size: int, seed: int)
 @click.option("--robots", "sizes", default="10,50", show_default=True, help="Comma-separated fleet sizes (1 is the baseline).")
 @click.option("--steps", type=click.IntRange(2, 100_000), default=200, show_default=True)
 @click.option("--broker", metavar="URL", help="mqtt://host:port (default: the embedded broker).")
-def bench_execute(sizes: str, steps: int, broker: str | None) -> int:
-    """Steps per second and round-trip latency of the execution layer with simulated robots."""
+@click.option("--step-timeout", type=click.FloatRange(min=0.1), default=10.0, show_default=True,
+              help="Seconds a step may take before the run stops with a fault.")
+@click.option("--connect-timeout", type=click.FloatRange(min=0.1),
+              help="Seconds for the robots to come up (default: 30, or 1.5 per robot above 20).")
+def bench_execute(sizes: str, steps: int, broker: str | None, step_timeout: float, connect_timeout) -> int:
+    """Steps per second and round-trip latency of the execution layer with simulated robots.
+
+    A fleet that does not come up or finish within its timeouts is a row of the table (exit 1
+    when one did not complete), not bad input."""
     from .execute import report
     from ..execute.broker import parse_url
 
     counts = sorted(set(_counts(sizes, "--robots", "fleet sizes")))
     if broker:
         parse_url(broker)
-    for line in report(counts, steps, broker):
+    failed: list[int] = []
+    for line in report(counts, steps, broker, step_timeout, connect_timeout, failed):
         click.echo(line)
-    return EXIT_OK
+    return EXIT_NO if failed else EXIT_OK
 
 
 @bench.command("anytime")
@@ -63,7 +71,11 @@ def bench_anytime(time_limit: float, maps: str) -> int:
     names = _names(maps)
     for name in names:
         bundled_path(name)  # unknown names fail here, before any work
-    found = rows(names, time_limit, progress=lambda name: click.echo(f"  {name} ...", err=True))
+    found: list[dict] = []
+    try:
+        rows(names, time_limit, progress=lambda name: click.echo(f"  {name} ...", err=True), out=found)
+    except KeyboardInterrupt:  # the maps measured before are shown all the same
+        return _stopped(table(found), f"{len(found)} of {len(names)} maps measured")
     for line in table(found):
         click.echo(line)
     return EXIT_OK
@@ -337,6 +349,14 @@ def bench_scale(robots: str, obstacles: str, size: int, seed: int, time_limit: f
     for line in scale_table(rows):
         click.echo(line)
     return EXIT_OK
+
+
+def _stopped(lines, what: str) -> int:
+    """Print what a benchmark measured before Ctrl-C, and the exit code of an interruption."""
+    for line in lines:
+        click.echo(line)
+    click.echo(f"bille bench: interrupted; {what}", err=True)
+    return EXIT_INTERRUPTED
 
 
 def _names(text: str) -> list[str]:

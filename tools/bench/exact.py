@@ -26,6 +26,8 @@ from bille.instances import load_instance
 from bille.instances.bundled import bundled_path
 from bille.solvers import solve
 
+from ..common import solved
+
 MAPS = ["crowded-3", "compare-2", "compare-3", "compare-4", "compare-5", "compare-6", "crowded-2", "point-4",
         "corridor-2", "reconfig-30"]
 WITH_PICKS = ["point-4", "corridor-2", "reconfig-30"]
@@ -33,7 +35,7 @@ WITH_PICKS = ["point-4", "corridor-2", "reconfig-30"]
 
 def _run(name, method, time_limit, **options):
     inst = load_instance(bundled_path(name))
-    result = solve(inst, method, time_limit=time_limit, **options)
+    result = solved(solve(inst, method, time_limit=time_limit, **options))
     rows = result.stats.get("horizons") or [{}]
     last = next((h for h in rows if h.get("answer") == "sat"), rows[-1])  # the optimum's model, else the last
     return inst, result, last

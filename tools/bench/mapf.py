@@ -23,6 +23,7 @@ from bille.instances.schedule import bind
 from bille.instances.walking import walk_for
 from bille.solvers import solve
 
+from ..common import solved
 from ..tables import text_table
 from .core import north_facing
 
@@ -86,7 +87,7 @@ def mapf_rows(folder: Path, maps=MAPS, agents=AGENTS, time_limit: float = 60.0, 
                 yield dict(map=name, agents=k, status="skipped", reason=str(exc))
                 continue
             # sum of loss: lacam3's objective, whose improvements lower the sum of costs
-            result = solve(inst, "lacam", objective="sum-of-loss", time_limit=time_limit, improve=improve)
+            result = solved(solve(inst, "lacam", objective="sum-of-loss", time_limit=time_limit, improve=improve))
             row = dict(map=name, agents=k, status=result.status, time_s=result.time_s,
                        first_s=result.stats.get("first_s"), lower=lower_soc(inst), peers={})
             if result.schedule is not None:
@@ -131,6 +132,6 @@ def full_square(size: int, robots: int, seed: int = 0) -> Instance:
 def scale_rows(size: int, robot_counts, seed: int = 0):
     for robots in robot_counts:
         inst = full_square(size, robots, seed)
-        result = solve(inst, "lacam", improve=0.0, time_limit=120)
+        result = solved(solve(inst, "lacam", improve=0.0, time_limit=120))
         yield dict(robots=robots, status=result.status, first_s=result.stats.get("first_s"), time_s=result.time_s,
                    makespan=result.metrics.makespan if result.metrics else None, nodes=result.stats.get("nodes"))

@@ -20,6 +20,7 @@ import numpy as np
 from bille.instances import BilleError, Instance
 from bille.solvers import solve
 
+from ..common import solved
 from ..tables import text_table
 
 FIELDS = ("map", "robots", "tasks", "status_off", "steps_off", "traveled_off", "time_off", "status_on", "steps_on",
@@ -30,9 +31,9 @@ SIZES = ((10, 2), (20, 4), (30, 6), (50, 10))  # (tiles moved, robots) of the ra
 def _run(inst: Instance, transfer: bool, horizon: int, d_tr: int, time_limit: float,
          motion: str = "temporal-astar"):
     if motion == "lacam":
-        return solve(inst, "lacam", load_transfer=transfer, d_tr=d_tr, time_limit=time_limit)
-    return solve(inst, "temporal-astar", epsilon=1.0, horizon=horizon, load_transfer=transfer, d_tr=d_tr,
-                 time_limit=time_limit)
+        return solved(solve(inst, "lacam", load_transfer=transfer, d_tr=d_tr, time_limit=time_limit))
+    return solved(solve(inst, "temporal-astar", epsilon=1.0, horizon=horizon, load_transfer=transfer, d_tr=d_tr,
+                        time_limit=time_limit))
 
 
 def decrease(before: int | None, after: int | None) -> float | None:
@@ -191,7 +192,7 @@ def random_report(runs: int, horizon: int, d_tr: int, time_limit: float, exact_l
                 if res.metrics is not None:
                     solved[transfer].append(res.metrics.makespan)
             if exact_limit > 0:
-                exact = solve(inst, "cpsat", time_limit=exact_limit)
+                exact = solved(solve(inst, "cpsat", time_limit=exact_limit))
                 if exact.status == "optimal":
                     optimal += 1
                     for transfer, res in results.items():
