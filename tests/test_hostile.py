@@ -2,6 +2,8 @@
 without exhausting memory; nothing half-written."""
 from __future__ import annotations
 
+import json
+
 import pytest
 
 from bille.instances.bundled import bundled_path
@@ -167,9 +169,9 @@ def test_max_runs_allows_more(tmp_path):
 
 
 @pytest.mark.parametrize("argv, message", [
-    (["gen", "graph", "--vertices", "1000000000"], "1000000000 vertices, more than the 500"),
-    (["gen", "hampath", "--vertices", "1000000000"], "1000000000 vertices, more than the 500"),
-    (["gen", "coop", "--vertices", "1000000000"], "1000000000 vertices, more than the 500"),
+    (["gen", "graph", "--vertices", "1000000000"], "1000000000 vertices, more than the 1600"),
+    (["gen", "hampath", "--vertices", "1000000000"], "1000000000 vertices, more than the 1600"),
+    (["gen", "coop", "--vertices", "1000000000"], "1000000000 vertices, more than the 1600"),
     (["gen", "hampath", "--vertices", "3", "--scale", "1000000000"], "the reduction's construction: a 7x2000000021 grid"),
     (["gen", "coop", "--vertices", "30", "--scale", "100000"], "the reduction's construction: a"),
     (["gen", "coop", "--gap", "1000000000"], "the cooperative gadget: a 2000000017x3 grid needs about"),
@@ -182,21 +184,29 @@ def test_generators_check_sizes_before_building(tmp_path, rejects, argv, message
 def test_a_large_graph_file_is_refused_before_it_is_searched(tmp_path, rejects):
     graph = tmp_path / "g.txt"
     graph.write_text(("o" * 45 + "\n") * 45)
-    rejects(["gen", "graph", graph], "2025 vertices, more than the 500")
+    rejects(["gen", "graph", graph], "2025 vertices, more than the 1600")
 
 
 def test_the_hamiltonian_path_search_has_a_step_budget(tmp_path, rejects, monkeypatch):
     from bille.instances.generators import graphs
 
-    monkeypatch.setattr(graphs, "MAX_STEPS", 5)
+    monkeypatch.setattr(graphs, "MAX_WORK", 5 * 36)
     graph = tmp_path / "g.txt"
     graph.write_text(("o" * 6 + "\n") * 6)
     rejects(["gen", "graph", graph], "Hamiltonian path is undecided after 5 steps")
 
 
+def test_the_hamiltonian_path_search_needs_no_deep_stack(tmp_path, cli, capsys):
+    # a 32x32 grid graph's path is 1,024 vertices long: the recursive search ran out of stack
+    graph = tmp_path / "g.txt"
+    graph.write_text(("o" * 32 + "\n") * 32)
+    assert cli(["gen", "graph", graph, "--json"]) == 0
+    assert len(json.loads(capsys.readouterr().out)["hamiltonian_path"]) == 32 * 32
+
+
 @pytest.mark.parametrize("call, message", [
     ("graph --vertices 1000000000", "unknown generator 'graph'"),
-    ("hampath --vertices 1000000000", "1000000000 vertices, more than the 500"),
+    ("hampath --vertices 1000000000", "1000000000 vertices, more than the 1600"),
     ("coop --gap 1000000000", "the cooperative gadget: a 2000000017x3 grid"),
 ])
 def test_generators_in_sweeps_check_sizes_first(tmp_path, rejects, monkeypatch, call, message):
@@ -274,3 +284,9 @@ def test_a_signed_order_naming_a_cell_outside_the_grid_fails_the_step():
     robot.handle("bille/v1/default/r1/order", order)
     assert robot.last_step == 12 and robot.errors[0]["errorType"] == "structureMismatch"
     assert "[0, 13], outside the 10x4 grid" in robot.errors[0]["errorDescription"]
+
+
+def test_a_movingai_map_of_negative_width_is_refused(tmp_path, rejects):
+    (tmp_path / "m.map").write_text("type octile\nheight 3\nwidth -1\nmap\n.....\n")
+    (tmp_path / "m.scen").write_text("version 1\n0\tm.map\t5\t3\t0\t0\t4\t2\t6\n")
+    rejects(["convert", tmp_path / "m.scen", tmp_path / "o.yaml"], "expected a positive height and width")

@@ -29,9 +29,10 @@ from ..errors import InstanceError
 
 XY = tuple[int, int]
 # the reductions and the exact Hamiltonian path search are for small graphs: a bound on the
-# vertices, and on the backtracking's steps, answers at once what would run for hours
-MAX_VERTICES = 500
-MAX_STEPS = 200_000
+# vertices (a 40x40 grid graph), and on the backtracking's work (steps x vertices, each step
+# looks at every vertex), answers within seconds what would run for hours
+MAX_VERTICES = 1600
+MAX_WORK = 5_000_000
 _PAIR = re.compile(r"^\s*(-?\d+)\s+(-?\d+)\s*$")
 _EDGE = re.compile(r"^\s*(-?\d+)\s+(-?\d+)\s+(-?\d+)\s+(-?\d+)\s*$")
 
@@ -195,7 +196,7 @@ def hamiltonian_path(g: nx.Graph, start: XY | None = None, end: XY | None = None
     firsts = [start] if start is not None else (leaves[:1] if leaves else sorted(g.nodes))
     _check_vertices(n)
     adj = {v: set(g[v]) for v in g}
-    budget = [MAX_STEPS]
+    budget = [max(1, MAX_WORK // n)]
     for first in firsts:
         path = [first]
         if _extend(adj, path, {first}, n, budget):
@@ -203,23 +204,37 @@ def hamiltonian_path(g: nx.Graph, start: XY | None = None, end: XY | None = None
     return None
 
 
-def _extend(adj: dict, path: list, seen: set, n: int, budget: list) -> bool:
-    if len(path) == n:
-        return True
-    budget[0] -= 1
-    if budget[0] < 0:
-        raise InstanceError(f"the graph's Hamiltonian path is undecided after {MAX_STEPS} steps of the exact "
-                            f"search ({n} vertices: a smaller graph, please)")
-    end = path[-1]
+def _options(adj: dict, end, seen: set) -> list:
+    """The unvisited neighbours of ``end``, fewest onward choices first (Warnsdorff's order)."""
     options = [v for v in adj[end] if v not in seen]
     options.sort(key=lambda v: sum(1 for u in adj[v] if u not in seen))
-    for v in options:
+    return options
+
+
+def _extend(adj: dict, path: list, seen: set, n: int, budget: list) -> bool:
+    """Extend ``path`` to all ``n`` vertices, depth first; ``frames[k]`` holds the options of
+    ``path[k]`` not yet tried (a loop, not recursion: paths are longer than Python's stack)."""
+    frames = [_options(adj, path[-1], seen)]
+    while frames:
+        if len(path) == n:
+            return True
+        if not frames[-1]:
+            frames.pop()
+            if frames:
+                seen.discard(path.pop())
+            continue
+        budget[0] -= 1
+        if budget[0] < 0:
+            raise InstanceError(f"the graph's Hamiltonian path is undecided after {MAX_WORK // n} steps of the "
+                                f"exact search ({n} vertices: a smaller graph, please)")
+        v = frames[-1].pop(0)
         path.append(v)
         seen.add(v)
-        if _promising(adj, seen, v, n) and _extend(adj, path, seen, n, budget):
-            return True
-        path.pop()
-        seen.discard(v)
+        if _promising(adj, seen, v, n):
+            frames.append(_options(adj, v, seen))
+        else:
+            path.pop()
+            seen.discard(v)
     return False
 
 

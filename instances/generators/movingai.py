@@ -42,6 +42,8 @@ def read_map(path: str | Path) -> tuple[int, int, np.ndarray]:
         height, width = int(head["height"]), int(head["width"])
     except (KeyError, ValueError):
         raise InstanceError(f"{path}: expected 'height H' and 'width W' lines before 'map'") from None
+    if height < 1 or width < 1:
+        raise InstanceError(f"{path}: expected a positive height and width, got height {height} and width {width}")
     check_size([load_moveset("point")], width, height, str(path))
     rows = lines[k + 1 : k + 1 + height]
     if len(rows) != height:
