@@ -12,6 +12,11 @@ leaves connectivity to cuts (``lazy``, ``cuts``), a solution that breaks it adds
 :mod:`.connectivity` and the solver goes on, in :meth:`Backend.solve`, the one place that loop
 is written. A model with the eager encoding is checked all the same (it never needs a cut).
 
+A solver's call runs in a thread of its own (:func:`interruptible`), so that Ctrl-C stops it at
+once: the call is ended and ``KeyboardInterrupt`` goes on to the caller, which keeps what it has.
+CaDiCaL holds Python's lock while it solves and cannot be interrupted; it runs in conflict
+budgets, and Ctrl-C is heard between two of them.
+
 Example: the shortest schedule of a window, as the anytime search asks for it (``done[k]``: the
 schedule is over after step ``k``; a schedule over after ``k`` is over after ``k + 1``)::
 
@@ -23,10 +28,13 @@ schedule is over after step ``k``; a schedule over after ``k`` is over after ``k
 """
 from __future__ import annotations
 
+import threading
+import time
 from dataclasses import dataclass, field, replace
 from typing import Callable, Sequence
 
 from bille.instances import Instance
+from bille.instances.limits import address_room
 
 from . import SAT, UNKNOWN, UNSAT
 from .connectivity import connectivity_cuts, separator_cuts
@@ -37,6 +45,10 @@ from .solution import tiles_at
 SAT_SOLVERS = ("cadical195", "cadical153", "cadical103", "glucose42", "glucose4", "glucose3", "gluecard4",
                "gluecard3", "maplechrono", "maplecm", "maplesat", "mergesat3", "minicard", "minisat22")
 SOLVERS = ("cpsat",) + SAT_SOLVERS  # every name open_backend takes
+# address space a new thread needs (its stack, and the malloc arena glibc gives it): with less
+# room under an address-space limit, starting one can fail, or hang in ``Thread.start`` when the
+# new thread dies before it says it has started
+THREAD_ROOM = 1 << 30
 
 
 @dataclass(frozen=True)
@@ -138,6 +150,42 @@ class Backend:
         self.close()
 
 
+def interruptible(work: Callable[[], Outcome], interrupt: Callable[[], None], deadline: float | None = None) -> Outcome:
+    """``work()``, a solver's call, run in a thread of its own while this one waits: Ctrl-C
+    (``KeyboardInterrupt``, which Python raises in the main thread only, and only between
+    bytecodes, never inside a solver's C++ call) is then heard at once. ``interrupt`` ends the
+    work early: on Ctrl-C (the work is waited for and the interrupt goes on) and at ``deadline``
+    if given (the work answers as it does when interrupted). With too little address space for
+    a thread (:data:`THREAD_ROOM`), the work runs in this thread."""
+    if address_room() < THREAD_ROOM:
+        return work()
+    box: dict = {}
+    done = threading.Event()
+
+    def run() -> None:
+        try:
+            box["outcome"] = work()
+        except BaseException as error:  # handed to the waiting thread
+            box["error"] = error
+        finally:
+            done.set()
+
+    thread = threading.Thread(target=run, name="solver", daemon=True)
+    thread.start()
+    try:
+        if deadline is not None and not done.wait(max(0.0, deadline - time.perf_counter())):
+            interrupt()
+        done.wait()
+    except BaseException:
+        interrupt()
+        thread.join()
+        raise
+    thread.join()
+    if "error" in box:
+        raise box["error"]
+    return box["outcome"]
+
+
 def open_backend(solver: str, model: Model, instance: Instance, *, connectivity: str = "eager", threads: int = 1,
                  seed: int = 0, presolve: bool = False, deadline: float | None = None) -> Backend:
     """A back end for ``model`` (of ``instance``): ``solver`` is ``cpsat`` (with ``threads``
@@ -168,4 +216,5 @@ def _cut_finder(model: Model, instance: Instance, connectivity: str) -> Callable
     return cuts
 
 
-__all__ = ["Backend", "Objective", "Outcome", "SAT", "SAT_SOLVERS", "SOLVERS", "UNKNOWN", "UNSAT", "open_backend"]
+__all__ = ["Backend", "Objective", "Outcome", "SAT", "SAT_SOLVERS", "SOLVERS", "THREAD_ROOM", "UNKNOWN", "UNSAT",
+           "interruptible", "open_backend"]

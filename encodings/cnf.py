@@ -5,29 +5,24 @@ over the objective's variables, or one literal of a chain), until a call is refu
 assignment is optimal) or time runs out.
 
 Solving runs in conflict budgets and checks the clock between them; the solvers that can be
-interrupted (all but CaDiCaL) are also interrupted at the deadline by a timer, since one budget
-can take seconds on a large model (under an address-space limit that leaves less than
-``THREAD_ROOM``, the budgets alone)."""
+interrupted (all but CaDiCaL) solve in a thread of their own and are interrupted at the deadline,
+or on Ctrl-C, by the thread that waits for them, since one budget can take seconds on a large
+model (under an address-space limit that leaves less than ``THREAD_ROOM``, the budgets alone)."""
 from __future__ import annotations
 
-import threading
 import time
 
 from pysat.card import CardEnc, EncType, ITotalizer
 from pysat.solvers import Solver
 
-from bille.instances.limits import address_room
-
 from . import SAT, UNKNOWN, UNSAT
 from .backend import SAT_SOLVERS as SOLVERS
-from .backend import Backend, Objective, Outcome
+from bille.instances.limits import address_room
+
+from .backend import THREAD_ROOM, Backend, Objective, Outcome, interruptible
 from .model import Model
 
 BUDGET = 2_000  # conflicts per call between clock checks
-# address space a timer thread needs (its stack, and the malloc arena glibc gives a new thread):
-# with less room under an address-space limit, starting one can fail, or hang in
-# ``Thread.start`` when the new thread dies before it says it has started
-THREAD_ROOM = 1 << 30
 
 
 class SatBackend(Backend):
@@ -114,28 +109,34 @@ class SatBackend(Backend):
         self.stats["solves"] += 1
         if self._stopped or (deadline is not None and start > deadline):
             return Outcome(UNKNOWN)
-        timer = None
-        if deadline is not None and self.interruptible and address_room() >= THREAD_ROOM:
-            timer = threading.Timer(deadline - start, self.solver.interrupt)
-            timer.start()
         try:
-            while True:
-                self.solver.conf_budget(BUDGET)
-                before = self.solver.accum_stats().get("conflicts", 0)
-                result = self.solver.solve_limited(assumptions=assumptions, expect_interrupt=timer is not None)
-                self.stats["conflicts"] += self.solver.accum_stats().get("conflicts", 0) - before
-                if result is True:
-                    return Outcome(SAT, self.solver.get_model())
-                if result is False:
-                    return Outcome(UNSAT)
-                if self._stopped or (deadline is not None and time.perf_counter() > deadline):
-                    return Outcome(UNKNOWN)
+            if not self.interruptible or address_room() < THREAD_ROOM:
+                return self._budgets(assumptions, deadline, False)
+            halt = []  # set when the solve is to end, whatever the clock says
+
+            def interrupt() -> None:
+                halt.append(True)
+                self.solver.interrupt()
+
+            return interruptible(lambda: self._budgets(assumptions, deadline, True, halt), interrupt, deadline)
         finally:
-            if timer is not None:
-                timer.cancel()
-                timer.join()
-                self.solver.clear_interrupt()
+            if self.interruptible:
+                self.solver.clear_interrupt()  # an interrupt that came after the last budget
             self.stats["solve_s"] += time.perf_counter() - start
+
+    def _budgets(self, assumptions, deadline, expect_interrupt: bool, halt=()) -> Outcome:
+        """Solve in conflict budgets until an answer, the deadline, or a halt."""
+        while True:
+            self.solver.conf_budget(BUDGET)
+            before = self.solver.accum_stats().get("conflicts", 0)
+            result = self.solver.solve_limited(assumptions=assumptions, expect_interrupt=expect_interrupt)
+            self.stats["conflicts"] += self.solver.accum_stats().get("conflicts", 0) - before
+            if result is True:
+                return Outcome(SAT, self.solver.get_model())
+            if result is False:
+                return Outcome(UNSAT)
+            if halt or self._stopped or (deadline is not None and time.perf_counter() > deadline):
+                return Outcome(UNKNOWN)
 
 
 __all__ = ["BUDGET", "SOLVERS", "SatBackend", "THREAD_ROOM"]

@@ -10,7 +10,7 @@ import time
 from ortools.sat.python import cp_model
 
 from . import SAT, UNKNOWN, UNSAT
-from .backend import Backend, Objective, Outcome
+from .backend import Backend, Objective, Outcome, interruptible
 from .model import Model, OutOfTime
 
 
@@ -84,10 +84,13 @@ class CpSatBackend(Backend):
         solver.parameters.num_workers = self.threads
         solver.parameters.random_seed = self.seed
         solver.parameters.cp_model_presolve = self.presolve
+        # Ctrl-C is Python's to hear (:func:`~.backend.interruptible`): CP-SAT's own handler would
+        # end the search as if time had run out, and leave no handler behind it in Python
+        solver.parameters.catch_sigint_signal = False
         if deadline is not None:
             solver.parameters.max_time_in_seconds = max(0.01, deadline - time.perf_counter())
         start = time.perf_counter()
-        status = solver.solve(cp)
+        status = interruptible(lambda: solver.solve(cp), solver.stop_search)
         self.stats["solves"] += 1
         self.stats["conflicts"] += int(solver.num_conflicts)
         self.stats["solve_s"] += time.perf_counter() - start

@@ -34,10 +34,16 @@ bound in turn, until they meet (``optimal``) or the time runs out (``feasible``,
 Robots subsets as neighbourhoods (fix the other robots' paths) cannot shorten a makespan unless the
 robots they leave out already finish early, so only time windows are searched.
 
+Ctrl-C (``KeyboardInterrupt``, also raised by a ``progress``, ``on_schedule`` or ``on_bound``
+callback) ends the run within a second or two with status ``interrupted``: the best schedule
+and the bound proved so far. The child process ignores the terminal's Ctrl-C and is stopped by
+the parent.
+
 ``stats``: ``first`` (method, makespan, seconds), ``improvements`` ([seconds, makespan] for every
 shorter schedule), ``lower_bounds`` ([seconds, bound] for every rise), ``windows`` (tried,
 shortened, proved not to shorten, undecided; ``proved_bound`` where the whole schedule's window
-proved it optimal), and the seconds spent on each search.
+proved it optimal), ``bound_search`` (where the bound search ran), and the seconds spent on each
+search.
 """
 from __future__ import annotations
 
@@ -146,9 +152,10 @@ class _Anytime:
         why = self._in_turns()
         background = why is None
         self.stats["bound_search"] = "child process" if background else f"in turns: {why}"
-        # the bound search starts at once, beside the heuristics
-        rise = Background(inst, self.bound_solver, bracket, self.end) if background else None
+        rise, seek, stopped = None, None, False
         try:
+            if background:  # the bound search starts at once, beside the heuristics
+                rise = Background(inst, self.bound_solver, bracket, self.end)
             self._first(first)
             rise = rise or Rise(inst, self.bound_solver, bracket, self.end)
             seek = _Seek(inst, self.cut, bracket.start, self.end)
@@ -169,9 +176,13 @@ class _Anytime:
                 self.windows.step(min(self.end, began + self.slice))
                 self.stats["search_s"] += time.perf_counter() - began
             rise.step(time.perf_counter())  # what the bound search sent while the last part ran
+        except KeyboardInterrupt:  # Ctrl-C, or a subscriber that raised it: keep what is held
+            stopped = True
         finally:
             if rise is not None:
                 rise.close()
+        if stopped:
+            return self.result("interrupted")
         if seek.infeasible:
             self.stats["reason"] = EXHAUSTED
             return self.result("infeasible")

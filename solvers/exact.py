@@ -16,6 +16,8 @@ with no schedule to go by), and it is returned (``feasible``) when time runs out
 
 Statuses: ``optimal`` (``stats.tiles_traveled_optimal`` says whether the second objective was
 proved too), ``feasible`` (time ran out; the incumbent, with the lower bound reached),
+``interrupted`` (Ctrl-C, or a ``progress`` callback that raised ``KeyboardInterrupt``: the best
+schedule so far, if any, with the lower bound reached),
 ``infeasible`` (a static proof, or the complete planner exhausted the reachable states:
 ``stats.reason``), ``unsolved`` (no schedule up to the horizon cap), ``timeout`` (time ran out
 with no schedule; the lower bound says how far the search got).
@@ -150,10 +152,13 @@ def run(job: Job, instance: Instance, time_limit: float | None, max_makespan: in
     if goal_violation(instance.world, instance.start_state, instance.goal_tiles, instance.goal_cells, 0) is None:
         search.stats["tiles_traveled_optimal"] = True
         return search.result("optimal", np.zeros((instance.num_robots, 0), dtype=np.int64), lower=0)
-    if _find_incumbent(search, incumbent, max_makespan is not None):
-        search.stats["reason"] = EXHAUSTED  # the complete planner's proof: no reachable state is a goal
-        return search.result("infeasible")
-    return parallel(search) if job.threads >= 2 and job.first_horizon is None else sequential(search)
+    try:
+        if _find_incumbent(search, incumbent, max_makespan is not None):
+            search.stats["reason"] = EXHAUSTED  # the complete planner's proof: no reachable state is a goal
+            return search.result("infeasible")
+        return parallel(search) if job.threads >= 2 and job.first_horizon is None else sequential(search)
+    except KeyboardInterrupt:  # Ctrl-C: the best schedule and the bound proved so far
+        return search.interrupted()
 
 
 def _find_incumbent(search: Search, given: Schedule | None, cap_given: bool) -> bool:

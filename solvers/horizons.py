@@ -46,12 +46,13 @@ def sequential(search: Search) -> Result:
             model, backend = span[0], span[1]
             began = time.perf_counter()
             outcome = search.solve(backend, [model.done[T]] if job.incremental else [])
+            if outcome.status == UNSAT:
+                search.proved_below = T + 1  # before the news goes out: a listener may stop the search
             search.record(T, backend, outcome.status, time.perf_counter() - began,
                           model_horizon=span[3] if job.incremental else None)
             if outcome.status == UNKNOWN:
                 return search.timeout()
             if outcome.status == UNSAT:
-                search.proved_below = T + 1
                 if found is not None:
                     break
                 T += 1

@@ -14,6 +14,7 @@ from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 
 from bille.encodings import SAT, UNKNOWN, UNSAT
 from bille.encodings.model import OutOfTime
+from bille.encodings.solution import decode
 from bille.instances.result import Result
 
 from .search import Search
@@ -31,8 +32,6 @@ def parallel(search: Search) -> Result:
     pool = ThreadPoolExecutor(lanes)
     try:
         while True:
-            while answers.get(search.proved_below) == UNSAT:
-                search.proved_below += 1
             if answers.get(search.proved_below) == SAT:
                 break
             if search.incumbent is not None and search.proved_below >= search.incumbent.shape[1] and not found:
@@ -54,6 +53,10 @@ def parallel(search: Search) -> Result:
                 T, model, backend = running.pop(future)
                 outcome, spent = future.result()
                 search.stats["cuts"] += outcome.cuts
+                if outcome.status != UNKNOWN:
+                    answers[T] = outcome.status
+                while answers.get(search.proved_below) == UNSAT:  # before the news goes out
+                    search.proved_below += 1
                 row = next(h for h in search.stats["horizons"] if h["T"] == T and "answer" not in h)
                 row.update(answer=outcome.status, time_s=round(spent, 3))
                 search.report(row)
@@ -61,7 +64,6 @@ def parallel(search: Search) -> Result:
                     if T in stopped:
                         continue  # a lower horizon was satisfiable
                     return search.timeout()
-                answers[T] = outcome.status
                 if outcome.status == SAT:
                     found[T] = (model, backend, outcome)
                     for U, _, b in running.values():
@@ -83,6 +85,7 @@ def parallel(search: Search) -> Result:
             row.setdefault("answer", "stopped" if row["T"] in stopped else UNKNOWN)
     T = search.proved_below
     model, backend, outcome = found[T]
+    search.incumbent = decode(model, inst, outcome.value)  # kept if the minimization is interrupted
     backend.tune(threads=lanes)  # the minimization of tiles traveled gets every worker
     return search.optimal(T, model, backend, outcome)
 

@@ -9,6 +9,7 @@ next slice.
 from __future__ import annotations
 
 import multiprocessing
+import signal
 import time
 
 import numpy as np
@@ -79,8 +80,19 @@ class Background:
         self.instance, self.bracket = instance, bracket
         self.inbox, outbox = FORK.Pipe(duplex=False)
         self.child = FORK.Process(target=_rise_child, args=(instance, solver, bracket.lower, end, outbox), daemon=True)
-        self.child.start()
-        outbox.close()
+        # the terminal's Ctrl-C goes to the whole process group: the child ignores it (the parent
+        # stops it), and is born with it held back, so that none lands before it is ignored
+        held = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+        try:
+            try:
+                self.child.start()
+            finally:
+                signal.pthread_sigmask(signal.SIG_SETMASK, held)  # a Ctrl-C held back lands here
+        except BaseException:
+            self.close()
+            raise
+        finally:
+            outbox.close()
 
     def step(self, until: float) -> None:
         inst, bracket = self.instance, self.bracket
@@ -101,14 +113,17 @@ class Background:
                 bracket.prove(found.makespan)
 
     def close(self) -> None:
-        if self.child.is_alive():
-            self.child.terminate()
-        self.child.join()
+        if self.child.pid is not None:
+            if self.child.is_alive():
+                self.child.terminate()
+            self.child.join()
         self.inbox.close()
 
 
 def _rise_child(instance: Instance, solver: str, lower: int, end: float, outbox) -> None:
     """The child's loop: raise the bound until ``end`` or an optimal schedule, sending each news."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
     bracket = Bracket(lower)
     bracket.on_bound.append(lambda value: outbox.send(("lower", value)))
     bracket.on_schedule.append(lambda found: outbox.send(("optimal", found.ids.tolist())))

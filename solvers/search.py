@@ -141,6 +141,12 @@ class Search:
             return self.result("feasible", best, lower=self.proved_below)
         return self.result("timeout", lower=self.proved_below)
 
+    def interrupted(self) -> Result:
+        """Stopped by the user: the best schedule so far (the incumbent, else one above the
+        horizon cap), if any, with the bound proved."""
+        best = self.incumbent if self.incumbent is not None else self.fallback
+        return self.result("interrupted", best, lower=self.proved_below)
+
     def infeasible(self) -> Result:
         """No schedule within the horizon cap: not a proof that none exists (a longer one may),
         so ``unsolved``, with the cap + 1 as the lower bound; ``feasible`` with that bound if an

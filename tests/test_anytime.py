@@ -109,6 +109,25 @@ def test_in_a_daemonic_process_the_two_searches_take_turns():
     assert solve(inst, "anytime", time_limit=60).stats["bound_search"] == "child process"
 
 
+def _stop(found):
+    raise KeyboardInterrupt
+
+
+@pytest.mark.parametrize("parallel", [False, True])
+def test_interrupted_keeps_the_best_schedule_and_bound_and_leaves_no_child(parallel):
+    """Ctrl-C, here raised by a subscriber at the first schedule: the run ends ``interrupted``
+    with that schedule and the static bound, and its child process is gone."""
+    import multiprocessing
+
+    inst = load_instance(bundled_path("bridge-2"))
+    result = solve(inst, "anytime", time_limit=120, parallel=parallel, on_schedule=_stop)
+    assert result.status == "interrupted"
+    assert validate(inst, result.schedule).metrics.makespan == result.stats["first"]["makespan"]
+    assert result.lower_bound == anytime.lower_bound(inst).lower
+    assert result.stats["bound_search"] == ("child process" if parallel else "in turns: parallel is off")
+    assert not multiprocessing.active_children()
+
+
 def _padded(inst, schedule, waits):
     """The schedule with ``waits`` joint waits inserted after its first step."""
     ids = bind(inst, schedule)

@@ -361,9 +361,10 @@ def test_a_sat_solve_past_its_deadline_answers_unknown_without_solving(solver):
         assert backend.solve([], None).status == "sat"  # and left no interrupt behind
 
 
-def test_no_timer_thread_under_a_tight_address_space_limit():
+def test_no_solver_thread_under_a_tight_address_space_limit():
     # under an address-space limit with little room, starting a thread can hang in
-    # Thread.start: the solve then runs on conflict budgets alone and still ends at its deadline
+    # Thread.start: the solve then runs on conflict budgets alone, in this thread, and still
+    # ends at its deadline
     import subprocess
     import sys
 
@@ -378,12 +379,15 @@ from bille.instances.limits import address_room, mapped
 assert address_room() == float("inf")
 inst = load_instance(bundled_path("corridor-2"))
 backend = open_backend("glucose42", build(inst, 12, Options()), inst)
+started, start = [], threading.Thread.start
+threading.Thread.start = lambda self: started.append(self) or start(self)
+assert backend.solve([], time.perf_counter() + 60).status == "unsat"  # corridor-2's optimum is 13
+assert started  # with room, the solve runs in a thread of its own
+started.clear()
 size = mapped() + THREAD_ROOM // 4
 resource.setrlimit(resource.RLIMIT_AS, (size, size))
 assert 0 < address_room() < THREAD_ROOM
-started = []
-threading.Timer = lambda *args: started.append(args)  # a timer would be created through this
-assert backend.solve([], time.perf_counter() + 60).status == "unsat"  # corridor-2's optimum is 13
+assert backend.solve([], time.perf_counter() + 60).status == "unsat"
 assert not started
 print("ok")
 """
@@ -419,3 +423,22 @@ def test_an_instance_the_complete_planner_exhausts_is_infeasible_for_the_exact_s
         result = solve(inst, method, time_limit=60)
         assert result.status == "infeasible" and result.schedule is None and result.lower_bound is None
         assert result.stats["reason"] == "the complete planner exhausted the reachable states"
+
+
+def _stop_after_a_horizon(event):
+    if "horizon" in event:  # the first horizon decided (the static bound is told before the search)
+        raise KeyboardInterrupt
+
+
+@pytest.mark.parametrize("method", ["cpsat", "cpsat-lanes", "sat"])
+def test_interrupted_keeps_the_incumbent_and_the_bound_proved(method):
+    """Ctrl-C, here raised by the progress callback once the first horizon is decided: the
+    search ends ``interrupted`` with the heuristics' schedule and the bound that horizon proved."""
+    inst = load_instance(bundled_path("corridor-2"))
+    threads = {"threads": 2} if method == "cpsat-lanes" else {}
+    result = solve(inst, method.split("-")[0], time_limit=120, progress=_stop_after_a_horizon, **threads)
+    assert result.status == "interrupted"
+    assert validate(inst, result.schedule).valid
+    assert result.metrics.makespan == result.stats["incumbent"]["makespan"]
+    first = result.stats["horizons"][0]
+    assert first["answer"] == "unsat" and result.lower_bound == first["T"] + 1 <= result.metrics.makespan
