@@ -51,8 +51,9 @@ def solve(instance: Instance, method: str = "auto", progress=None, *, bound: boo
     static argument proved that none exists, or ``optimal`` makespan without a matching proof.
 
     Ctrl-C (``KeyboardInterrupt``) ends the call with status ``interrupted``: a method that holds
-    a schedule or a proved bound returns them itself; otherwise the result keeps the static bound,
-    if it was computed, and no schedule.
+    a schedule or a proved bound returns them itself; if it lets the interrupt through, the result
+    keeps the last schedule and the best bound it told (``on_schedule``, ``on_bound``, for the
+    methods that take them), and the static bound if it was computed.
 
     >>> from bille.instances import instance_from_text
     >>> inst = instance_from_text("grid: |\\n  TTT\\nmoveset: point\\nrobots: [{at: [0, 0]}]\\nrobot_goals: [[2, 0]]")
@@ -71,6 +72,11 @@ def solve(instance: Instance, method: str = "auto", progress=None, *, bound: boo
     limit = options.get("time_limit", accepted["time_limit"].default if "time_limit" in accepted else None)
     deadline = None if limit is None else start + limit
     bounds, bound_s = None, None
+    kept = _Kept()
+    for name, keep in (("on_schedule", kept.schedule), ("on_bound", kept.bound)):
+        given = options.get(name)
+        if name in accepted and (given is None or callable(given)):  # kept here too, in case Ctrl-C ends it
+            options[name] = keep if given is None else _both(keep, given)
     try:
         if "bounds" in accepted:  # the method searches from the bound: first, and it gets the time left
             bounds, bound_s = _static_bound(instance, deadline, start, progress)
@@ -84,14 +90,38 @@ def solve(instance: Instance, method: str = "auto", progress=None, *, bound: boo
             result = Result(method, "timeout", stats={"failure": "the time limit ran out computing the lower bound"})
         else:
             result = plan(instance, **options)
-    except KeyboardInterrupt:  # a method with nothing to keep lets it through
-        result = Result(method, "interrupted")
+    except KeyboardInterrupt:  # the method let it through: what it told before is kept
+        result = kept.result(instance, method)
     if bound and bounds is None and result.status != "interrupted":  # after the method, in the time left
         try:
             bounds, bound_s = _static_bound(instance, deadline, _clock(), progress)
         except KeyboardInterrupt:
             result = _dataclasses.replace(result, status="interrupted")
     return _checked(instance, method, result, bounds, bound_s, _clock() - start)
+
+
+class _Kept:
+    """The last schedule and the best bound a method told while it ran."""
+
+    def __init__(self) -> None:
+        self.ids, self.lower = None, None
+
+    def schedule(self, found) -> None:
+        self.ids = found.ids
+
+    def bound(self, value: int) -> None:
+        self.lower = value if self.lower is None else max(self.lower, value)
+
+    def result(self, instance: Instance, method: str) -> Result:
+        schedule = None if self.ids is None else Schedule.from_ids(instance, self.ids, meta={"method": method})
+        return Result(method, "interrupted", schedule, lower_bound=self.lower)
+
+
+def _both(first, second):
+    def tell(value) -> None:
+        first(value)
+        second(value)
+    return tell
 
 
 def _static_bound(instance: Instance, deadline: float | None, began: float, progress):

@@ -10,6 +10,7 @@ import signal
 import subprocess
 import sys
 import time
+from typing import Callable
 
 import numpy as np
 import pytest
@@ -20,7 +21,7 @@ from bille.instances.bundled import bundled_path
 from bille.instances.moveset import Moveset
 from bille.instances.result import Result
 from bille.solvers import METHODS, Schedule, bind, load_schedule, solve, validate
-from bille.solvers.bounds import Bounds
+from bille.solvers.bounds import Bounds, lower_bound
 
 
 class FakeClock:
@@ -250,3 +251,25 @@ def test_a_benchmark_stops_with_the_solve_that_was_stopped(monkeypatch, cli, cap
     out, err = capsys.readouterr()
     assert solved == [("corridor-2", "temporal-astar"), ("corridor-2", "anytime")]  # point-4 never started
     assert "corridor-2" in out and "crowded-2" not in out and "interrupted; 1 of 3 maps measured" in err
+
+
+def test_an_interrupt_let_through_keeps_what_the_method_told(monkeypatch):
+    inst = load_instance(bundled_path("corridor-2"))
+    found = solve(inst, "temporal-astar")
+    told = []
+
+    class Found:  # as anytime tells a schedule: its action ids
+        ids = bind(inst, found.schedule)
+
+    def stopped(instance, *, time_limit: float = 60.0, bounds=None, on_schedule: Callable | None = None,
+                on_bound: Callable | None = None) -> Result:
+        on_bound(bounds.lower + 2)
+        on_schedule(Found())
+        on_bound(bounds.lower + 1)  # a lower one changes nothing
+        raise KeyboardInterrupt
+
+    monkeypatch.setitem(METHODS, "anytime", stopped)
+    result = solve(inst, "anytime", on_schedule=lambda f: told.append(f.ids.shape))
+    assert result.status == "interrupted" and result.schedule.actions == found.schedule.actions
+    assert result.metrics == found.metrics and result.lower_bound == lower_bound(inst).lower + 2
+    assert told == [Found.ids.shape]  # a callback given to solve() is called too
