@@ -175,9 +175,11 @@ def test_max_runs_allows_more(tmp_path):
     (["gen", "hampath", "--vertices", "3", "--scale", "1000000000"], "the reduction's construction: a 7x2000000021 grid"),
     (["gen", "coop", "--vertices", "30", "--scale", "100000"], "the reduction's construction: a"),
     (["gen", "coop", "--gap", "1000000000"], "the cooperative gadget: a 2000000017x3 grid needs about"),
+    (["gen", "coop", "--vertices", "3", "--scale", "100000"], "gen coop: a "),
     (["gen", "corridor", "--room", "2", "--moved", "1", "--robots", "1"], "1 robot does not fit two 2x2 rooms"),
 ])
 def test_generators_check_sizes_before_building(tmp_path, rejects, argv, message):
+    # each of these ran for a minute or more, or out of memory
     rejects(argv, message, tmp_path / "g.yaml")
 
 
@@ -290,3 +292,25 @@ def test_a_movingai_map_of_negative_width_is_refused(tmp_path, rejects):
     (tmp_path / "m.map").write_text("type octile\nheight 3\nwidth -1\nmap\n.....\n")
     (tmp_path / "m.scen").write_text("version 1\n0\tm.map\t5\t3\t0\t0\t4\t2\t6\n")
     rejects(["convert", tmp_path / "m.scen", tmp_path / "o.yaml"], "expected a positive height and width")
+
+
+def test_a_sweep_named_by_its_file_gets_a_safe_folder_name(tmp_path):
+    from bille.tools.sweep.spec import load_spec
+
+    spec = tmp_path / "my sweep (2).yaml"
+    spec.write_text(SWEEP)
+    assert load_spec(spec).name == "my_sweep__2_"
+
+
+def test_a_random_structure_grows_in_time_linear_in_its_tiles(monkeypatch):
+    # each new tile was drawn from a list rebuilt from all tiles so far: 6,000 tiles took 43 s.
+    # Counted without a clock: the neighbourhoods looked at, once per tile now.
+    import random as rnd
+
+    from bille.instances.generators import random as gen
+
+    looked = []
+    real = gen._around
+    monkeypatch.setattr(gen, "_around", lambda c, w, h: looked.append(c) or real(c, w, h))
+    tiles = gen._polyomino(60, 60, 1500, rnd.Random(0))
+    assert int(tiles.sum()) == 1500 and len(looked) == 1500

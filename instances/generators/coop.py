@@ -151,6 +151,7 @@ def _attached(g: nx.Graph, scale: int, start: XY | None, end: XY | None, gap: in
         raise InstanceError(f"the start and end vertices are both {start}")
     n = g.number_of_nodes()
     parts = _Parts(g, scale, end, gap)
+    check_size([load_moveset("point")], parts.width, parts.height, "gen coop")
     meta = {"generator": "coop", "theorem": "2", "scale": scale, "gap": gap, "vertices": n,
             "edges": g.number_of_edges(), "start_vertex": list(start), "end_vertex": list(end),
             "graph": draw_graph(g), "t_g": T_G, "arrival": parts.arrival,

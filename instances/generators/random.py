@@ -172,21 +172,54 @@ def _positive(**values) -> None:
 
 
 def _polyomino(width: int, height: int, count: int, rnd: random.Random) -> np.ndarray:
-    """A random connected set of ``count`` cells grown from the grid's centre."""
+    """A random connected set of ``count`` cells grown from the grid's centre: each new cell is
+    drawn from the empty cells beside the set, each as often as it has tiles beside it (a
+    Fenwick tree of those counts by cell, so a draw costs O(log cells), not a pass over the set)."""
     tiles = np.zeros(width * height, dtype=bool)
-    first = (height // 2) * width + width // 2
-    tiles[first] = True
-    frontier = {first}
-    size = 1
-    while size < count:
-        options = sorted(c2 for c in frontier for c2 in _around(c, width, height) if not tiles[c2])
-        if not options:
-            raise InstanceError(f"{count} tiles do not fit the grid")
-        c = rnd.choice(options)
+    beside = _Counts(width * height)
+
+    def grow(c: int) -> None:
         tiles[c] = True
-        frontier.add(c)
-        size += 1
+        beside.set(c, 0)
+        for n in _around(c, width, height):
+            if not tiles[n]:
+                beside.set(n, beside.count[n] + 1)
+
+    grow((height // 2) * width + width // 2)
+    for _ in range(count - 1):
+        if not beside.total:
+            raise InstanceError(f"{count} tiles do not fit the grid")
+        grow(beside.find(rnd.choice(range(beside.total))))
     return tiles
+
+
+class _Counts:
+    """Counts per index with prefix sums (a Fenwick tree): :meth:`find` is the index that holds
+    the ``k``-th entry (0-based) when every index ``i`` is listed ``count[i]`` times in order."""
+
+    def __init__(self, n: int) -> None:
+        self.count = [0] * n
+        self.tree = [0] * (n + 1)
+        self.total = 0
+
+    def set(self, i: int, value: int) -> None:
+        delta = value - self.count[i]
+        if delta:
+            self.count[i] = value
+            self.total += delta
+            i += 1
+            while i < len(self.tree):
+                self.tree[i] += delta
+                i += i & -i
+
+    def find(self, k: int) -> int:
+        pos, bit = 0, 1 << (len(self.tree) - 1).bit_length()
+        while bit:
+            nxt = pos + bit
+            if nxt < len(self.tree) and self.tree[nxt] <= k:
+                pos, k = nxt, k - self.tree[nxt]
+            bit >>= 1
+        return pos
 
 
 def _around(c: int, width: int, height: int) -> list[int]:

@@ -133,7 +133,8 @@ def parse_spec(data, path: Path, src=None) -> Spec:
     max_runs = data.get("max_runs", MAX_RUNS)
     if isinstance(max_runs, bool) or not isinstance(max_runs, int) or max_runs < 1:
         fail(f"max_runs: expected a positive whole number, got {max_runs!r}", "max_runs")
-    name = data.get("name", path.stem)
+    # a file's own name is a name already: only what a folder name cannot hold is replaced
+    name = data.get("name", re.sub(r"[^A-Za-z0-9._-]", "_", path.stem)[:100])
     if not isinstance(name, str) or not _NAME.match(name) or set(name) == {"."}:
         fail(f"name: {name!r} is not a safe file name (letters, digits, '-', '_', '.'; no separators), the "
              "results folder is sweep-NAME" + ("" if "name" in data else ": give one with name:"), "name")
