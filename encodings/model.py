@@ -53,8 +53,8 @@ from .ends import add_end_constraints, end_roles
 from .prune import change_window, prune
 
 CONNECTIVITY = ("eager", "lazy", "cuts")
-# the action kinds as plain ints, compared in the inner loops (an enum's attribute lookup there was
-# a third of the time to build a model)
+# the action kinds as plain ints, compared in the inner loops (an enum's attribute lookup costs
+# there)
 WAIT, MOTION, PICK, PLACE = (int(k) for k in (Kind.WAIT, Kind.MOTION, Kind.PICK, Kind.PLACE))
 
 
@@ -233,8 +233,7 @@ class _Builder:
                     self.x[(i, t, p)] = m.var(("x", i, t, p))
                     poses.append(self.x[(i, t, p)])
                 # one pose at a time: implied by the actions (one per step, each from one pose to
-                # one), and said outright it lets the solver conclude sooner (bridge-3 at T = 13:
-                # 9.4 k conflicts against 26.5 k; bridge-2 at T = 19: 54 k against 69 k)
+                # one), and said outright it lets the solver conclude sooner (docs/decisions.md)
                 m.exactly_one.append(poses)
 
     def tile(self, t: int, c: int) -> int:
@@ -275,8 +274,7 @@ class _Builder:
                 for p in np.flatnonzero(nxt).tolist():
                     m.clauses.append([-self.x[(i, t, p)]] + incoming.get(p, []))
                 # and a pose leads on by one of its actions: implied (one action per step, from
-                # the one pose), said outright for the solver (bridge-3 at T = 13: 6.6 k conflicts
-                # against 8.1 k; bridge-2 at T = 18: 17.8 k against 28.3 k)
+                # the one pose), said outright for the solver (docs/decisions.md)
                 for p in ps.tolist():
                     if self.x[(i, t - 1, p)] != m.true:
                         m.clauses.append([-self.x[(i, t - 1, p)]] + outgoing.get(p, []))
@@ -321,8 +319,7 @@ class _Builder:
         cells (swept, target) by its action, and the carried-tile cells by its action and its load.
         The poses say the same as the actions that leave and reach them (a robot has one pose at
         a time, and every action from a pose needs its feet), in fewer clauses, and the solver
-        decides faster with them: bridge-2 at ``T = 18`` 30 s against 62 s, bridge-3 at ``T = 14``
-        42 s against 61 s (one CP-SAT worker)."""
+        decides faster with them (docs/decisions.md)."""
         m = self.m
         if self.inst.num_robots < 2:
             return
@@ -354,8 +351,8 @@ class _Builder:
                 m.at_most_one.append(group)
 
     def _done(self, min_done: int) -> None:
-        """``done[k]``: every robot waits at every step after ``k`` (a clause per later step: a
-        chain ``done[k] -> done[k + 1]`` steered the solvers worse, bridge-3 26-30 against 15)."""
+        """``done[k]``: every robot waits at every step after ``k`` (a clause per later step; no
+        chain ``done[k] -> done[k + 1]``, which steers the solvers worse: docs/decisions.md)."""
         m, first = self.m, max(0, min_done)
         waits = {(i, t): [v for v, p, a in m.y[(i, t)] if g.kind[a] == WAIT]
                  for i, g in enumerate(self.world.graphs) for t in range(first + 1, self.T + 1)}

@@ -82,13 +82,11 @@ def plan(instance: Instance, *, time_limit: float = 60.0, window: int = 8, slice
     parallel : raise the bound in a child process, on a second core, while the parent searches
         windows (default; where the platform cannot fork, or in a daemonic process, which may not
         start one, the two take turns). ``stats.bound_search`` says which.
-    solver : the neighbourhood search's solver: a python-sat name (default ``minisat22``: on the
-        lt maps it reaches the same schedules as ``glucose42`` sooner, both decide more windows
-        than ``cadical195``, and it stops at its deadline) or ``cpsat`` (one worker, the part's
-        length minimized in one solve; measured no better).
-    bound_solver : the bound search's solver: ``cpsat`` (the default: one CP-SAT worker, measured
-        3 to 4 times faster than CaDiCaL on these models, bridge-2 at T = 14 to 16: 2.5 / 3.6 /
-        7.7 s against 11 / 19 / 29 s) or a python-sat solver name.
+    solver : the neighbourhood search's back end: a python-sat name (default ``minisat22``, which
+        can be interrupted at a window's deadline) or ``cpsat`` (one worker, the part's length
+        minimized in one solve). docs/decisions.md has the measurements behind the defaults.
+    bound_solver : the bound search's back end: ``cpsat`` (the default, one worker) or a
+        python-sat name.
     swap : a window may end with interchangeable robots (one moveset, no goal cell) in one
         another's end states, the rest of the schedule permuted to match (default true).
     incumbent : a schedule to start from instead of the heuristics' (must be valid).
@@ -243,9 +241,8 @@ class _Seek:
     (at least 6 s); then the complete planner (:func:`.incumbent.complete_search`) for a tenth (at
     least 2 s), so that what the bound search found beside it is read soon on small instances,
     and then once more, from the start, with all the time left: its search is deterministic and
-    heavy-tailed (on a random 10x8 instance with four robots and ten moved tiles, 17 s to a
-    schedule with seed 0, 37 and 39 s with seeds 1 and 3, none in 40 s with seed 2), so it is
-    not cut into restarts."""
+    heavy-tailed (a few restarts would each stop short of where one long run gets), so it is not
+    cut into restarts."""
 
     def __init__(self, instance: Instance, cut: list, start: float, end: float) -> None:
         self.instance, self.cut, self.end, self.infeasible = instance, cut, end, False

@@ -61,8 +61,7 @@ def plan_cpsat(instance: Instance, *, time_limit: float | None = None, threads: 
     threads : CP-SAT workers (1 with a fixed seed is repeatable).
     presolve : CP-SAT's presolve for the makespan search; off by default: on these large
         Boolean models it costs more than it saves (``bille bench exact`` measures it). The
-        minimization of tiles traveled always presolves: an objective profits from it (compare-6:
-        1.8 s with it, 120 s without).
+        minimization of tiles traveled always presolves: an objective profits from it.
     max_makespan : horizon cap (default: the incumbent's makespan, or ``max(2 LB, LB + 24)``
         where there is no incumbent).
     connectivity : ``eager`` (reachability layers; measured faster, see ``bille bench exact``)
@@ -73,7 +72,7 @@ def plan_cpsat(instance: Instance, *, time_limit: float | None = None, threads: 
         was proved. ``stats.makespan_s`` is the time to the proved optimal makespan.
     prune : reachability and candidate-cell pruning (switch off to measure them).
     prune_tiles : the reachability in time with the tiles (:mod:`bille.encodings.reach`), part of
-        ``prune``; off alone, the encoding as it was before it (``bille bench exact`` compares).
+        ``prune``; switch it off alone to measure it (``bille bench exact`` compares).
     single_carry : only schedules that carry every tile once, from a start-only cell straight to
         a goal-only cell (no hand-over): the best such makespan (see ``encodings.model.Options``).
         Its proofs hold for those schedules only: ``optimal`` is optimal for ``stats.objective``,
@@ -111,12 +110,9 @@ def plan_sat(instance: Instance, *, time_limit: float | None = None, max_makespa
     default ``glucose42``), ``chunk`` (how many horizons one model covers before it is rebuilt
     larger, default 1).
 
-    The defaults were chosen by measurement (seconds to the proved optimal makespan on 2 cores;
-    docs/exact.md has the table): a model built for one horizon is pruned to what that horizon
-    allows, and that outweighs keeping learned clauses across horizons in a larger model;
-    Glucose 4.2 beats CaDiCaL 1.9.5 on these models (``bille bench exact --only sat-solver``).
-    reconfig-30: 18 s against 51 s for CaDiCaL with 8 horizons per model; lt-4: 4.8 s against
-    24 s; compare-5: 0.4 s against 2.7 s.
+    The defaults are the fastest measured to a proved optimum (``bille bench exact --only
+    sat-solver``; docs/exact.md): a model built for one horizon is pruned to what that horizon
+    allows, which outweighs keeping learned clauses across horizons in a larger model.
     """
     if solver not in SAT_SOLVERS:
         raise OptionError(f"sat: unknown solver {solver!r} (expected one of: {', '.join(SAT_SOLVERS)})")

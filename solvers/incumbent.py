@@ -23,8 +23,8 @@ from .validate import validate
 
 # the heuristics tried for a first schedule, in order: path planning, each method with a share
 # of the budget; reconfiguration, the loop with each motion layer, without and with load
-# transfer, on the instance's tasks and then on a derived sequence (measured on the lt maps: a
-# derived sequence gives lt-4 16 steps against 58 on the paper's tasks, lt-7 20 against 47)
+# transfer, on the instance's tasks and then on a derived sequence (often much shorter than the
+# paper's tasks: docs/decisions.md)
 PATH_PLANNING = (("lacam", 0.5), ("temporal-astar", 0.5))
 RECONFIGURATION = tuple((motion, transfer, sequence) for sequence in ("given", "derived")
                         for motion in ("temporal-astar", "lacam", "mstar") for transfer in (False, True))
@@ -80,12 +80,10 @@ def retry(instance: Instance, cut: list, budget: float) -> Incumbent | None:
     still cut, until one finds a schedule or ``budget`` ends), or None. A run is *cut short* when
     its time ran out between the loop's steps (``stats.failure`` "time limit": it was still
     getting on); one that ends otherwise (a deadlock, no joint plan for one step within its time)
-    is not tried again: on sixteen random 10x8 maps with 30 tiles, where the joint plans of one
-    step run out of time, twice the time gave none of them a schedule and took the complete
-    planner's time. On a random 40x40 map with 600 tiles, six robots and 30 moved tiles (``bille
-    gen random --width 40 --height 40 --tiles 600 --robots 6 --moved 30 --seed 1``) the loop with
-    LaCAM* needs about 3 s, more than its share of the first schedule's budget in a 60 s run, and
-    nothing else finds a schedule."""
+    is not tried again: more time rarely gives it a schedule and takes the complete planner's
+    (docs/decisions.md). Example: on ``bille gen random --width 40 --height 40 --tiles 600
+    --robots 6 --moved 30 --seed 1`` the loop with LaCAM* needs more than its share of the first
+    schedule's budget, and nothing else finds a schedule."""
     end = time.perf_counter() + budget
     pending = list(cut)
     while pending and time.perf_counter() < end:
@@ -106,9 +104,8 @@ def fewer_robots(instance: Instance, budget: float) -> Incumbent | None:
     """The first valid schedule the reconfiguration loop finds within ``budget`` seconds with
     fewer robots taking jobs (the loop's ``active``; the others only keep out of the way), or
     None: for when the loop with every robot finds none. On crowded maps the robots with jobs
-    block one another where fewer get through: on a random 10x8 map with 30 tiles, four robots
-    and ten moved tiles (``bille gen random --robots 4 --moved 10 --seed 6``) every run with all
-    four deadlocks or finds no joint plan, while three of them finish in 72 steps in 0.9 s. Sets
+    block one another where fewer get through (``bille gen random --robots 4 --moved 10 --seed
+    6``: every run with all four robots deadlocks or finds no joint plan, three of them finish). Sets
     of ``m - 1`` robots first, then smaller; per size, each motion layer of :data:`FEWER` on
     every set before the next layer, each run within a quarter of the budget. The first schedule
     found is returned, compacted as in :func:`first_schedule`: runs that fail mostly take their

@@ -119,11 +119,11 @@ def test_interrupted_keeps_the_best_schedule_and_bound_and_leaves_no_child(paral
     with that schedule and the static bound, and its child process is gone."""
     import multiprocessing
 
-    inst = load_instance(bundled_path("bridge-2"))
+    inst = SOLVABLE[5]  # the heuristics' first schedule, 8 steps, is optimal; the static bound is 5
     result = solve(inst, "anytime", time_limit=120, parallel=parallel, on_schedule=_stop)
     assert result.status == "interrupted"
-    assert validate(inst, result.schedule).metrics.makespan == result.stats["first"]["makespan"]
-    assert result.lower_bound == anytime.lower_bound(inst).lower
+    assert validate(inst, result.schedule).metrics.makespan == result.stats["first"]["makespan"] == OPTIMA[inst]
+    assert result.lower_bound == anytime.lower_bound(inst).lower < OPTIMA[inst]
     assert result.stats["bound_search"] == ("child process" if parallel else "in turns: parallel is off")
     assert not multiprocessing.active_children()
 
@@ -281,14 +281,35 @@ def test_an_instance_the_complete_planner_exhausts_is_infeasible():
         assert result.stats["reason"] == "the complete planner exhausted the reachable states"
 
 
-def test_gave_up_and_out_of_time_are_told_apart():
+class _Ticks:
+    """A clock that moves on 10 ms each time it is read: M* runs out of 50 ms after a few
+    expansions, on any machine and under any load."""
+
+    def __init__(self):
+        self.now = 0.0
+
+    def perf_counter(self):
+        self.now += 0.01
+        return self.now
+
+
+@pytest.fixture
+def ticking_mstar(monkeypatch):
+    from bille.heuristics import joint, mstar
+
+    clock = _Ticks()
+    monkeypatch.setattr(mstar, "time", clock)
+    monkeypatch.setattr(joint, "time", clock)
+
+
+def test_gave_up_and_out_of_time_are_told_apart(ticking_mstar):
     deadlock = solve(load_instance(bundled_path("crowded-2")), "temporal-astar", time_limit=60)
     assert deadlock.status == "unsolved" and deadlock.stats["failure"] == "deadlock" and deadlock.time_s < 60
     late = solve(load_instance(bundled_path("compare-6")), "mstar", time_limit=0.05, bound=True)
     assert late.status == "timeout" and late.schedule is None and late.lower_bound is not None
 
 
-def test_gap_takes_options_a_schedule_file_and_keeps_a_timeouts_bound(tmp_path, capsys):
+def test_gap_takes_options_a_schedule_file_and_keeps_a_timeouts_bound(tmp_path, capsys, ticking_mstar):
     from bille.tools.cli import main
 
     inst = load_instance(bundled_path("compare-3"))
