@@ -3,7 +3,8 @@
 The high level is a depth-first search over *configurations* (one pose per robot). Each node
 lazily enumerates *constraints*: "robot ``order[0]`` makes move ``k0``", then also "robot
 ``order[1]`` makes move ``k1``", and so on, one robot deeper each time a constraint is taken
-(a breadth-first tree of constraints under every node). A constraint is handed to the
+(a breadth-first tree of constraints under every node; a move that collides with the moves
+already fixed is left out, as no configuration completes it). A constraint is handed to the
 *configuration generator*, which completes it to a next configuration or says it cannot. The
 first successor of a node is the generator's free choice; as the search comes back to a node,
 ever more robots are pinned, until every joint move has been tried. A configuration seen before
@@ -162,8 +163,10 @@ class PoseSpace:
     def unreachable(self) -> list[int]:
         return self.problem.unreachable()
 
-    def num_moves(self, i: int, config: Poses) -> int:
-        return len(self.problem.moves(i, config[i]))
+    def branches(self, config: Poses, forced: tuple, i: int) -> list[int]:
+        """Robot ``i``'s moves that a constraint may add to ``forced`` (the others cannot be
+        completed to a configuration, nor can any constraint that extends them)."""
+        return self.generator.compatible(config, forced, i)
 
     def generate(self, config: Poses, order: list[int], forced: tuple, first: bool):
         return self.generator.generate(config, order, forced, self.pinned if first else {})
@@ -263,7 +266,7 @@ class _LaCAM:
             forced = node.tree.popleft()
             if len(forced) < self.m:
                 i = node.order[len(forced)]
-                moves = list(range(space.num_moves(i, node.config)))
+                moves = space.branches(node.config, forced, i)
                 self.rng.shuffle(moves)
                 node.tree.extend(forced + ((i, k),) for k in moves)
             got = space.generate(node.config, node.order, forced, node is root)

@@ -90,8 +90,8 @@ class StateSpace:
     def unreachable(self) -> list[int]:
         return []  # a goal cell may become reachable once tiles move: the search finds out
 
-    def num_moves(self, i: int, config: tuple) -> int:
-        return len(self.options(config)[i])
+    def branches(self, config: tuple, forced: tuple, i: int) -> list[int]:
+        return list(range(len(self.options(config)[i])))
 
     def is_goal(self, config: tuple) -> bool:
         return goal_violation(self.world, self.states[config], self.goal_tiles, self.goal_cells, 0) is None

@@ -5,10 +5,12 @@ PIBT for classic collisions.
 Under rule 3 a robot's collision set contains its cells before the step, so no robot ever enters
 a cell another robot stands on *in the same step*: the classic "push the robot ahead and follow
 it" is not a move here. Priority inheritance therefore acts one step ahead: a robot whose best
-move is blocked by robots still to be decided *pushes* them (they are decided now, preferring
-moves that leave the cells it wants), then takes its best move that is free (waiting, at worst,
-which is always free). With classic collisions (point robots) a pushed robot must leave the
-cell its pusher wants, and a push that fails makes the pusher try its next cell.
+move is blocked by robots still to be decided *pushes* them (they are decided now, each taking
+the move that brings it closest to a pose clear of the cells its pusher wants: a biped keeps one
+foot down every step, so that can take two steps or more, and it may push others in turn), then
+waits and makes its move next step; a push that fails (a robot with no way out) makes it try its
+next move. With classic collisions (point robots) a pushed robot must leave the cell its pusher
+wants, and a push that fails makes the pusher try its next cell.
 
 A generator completes a *constraint* (some robots' moves fixed) to a next configuration, or says
 that it cannot; :mod:`.lacam` searches over configurations with it.
@@ -18,7 +20,10 @@ from __future__ import annotations
 import random
 from dataclasses import dataclass
 
+from bille.instances.lru import LRU
+
 Poses = tuple[int, ...]
+ESCAPE_DEPTH = 4  # moves a pushed robot looks ahead to leave the cells its pusher wants
 
 
 def next_configuration(walks: list, dist_lists: list[list[int]], config: Poses, order: list[int],
@@ -61,16 +66,16 @@ class _Generator:
 class Bille(_Generator):
     """PIBT for rule 3 (module docstring): the pushed robots move now, the pusher next step."""
 
+    def __init__(self, problem, rng: random.Random) -> None:
+        super().__init__(problem, rng)
+        self._escapes = LRU(4096)
+        self._configs = LRU(64)
+
     def generate(self, config: Poses, order: list[int], forced: tuple, pinned: dict[int, frozenset],
                  wants: dict[int, frozenset] | None = None) -> tuple[tuple[int, ...], Poses] | None:
-        problem = self.problem
         m = len(config)
         self.config = config
-        self.moves = [problem.moves(i, p) for i, p in enumerate(config)]
-        self.owner: dict[int, int] = {}
-        for i, moves in enumerate(self.moves):
-            for c in moves[0][2]:  # waiting: the cells the robot stands on (and its tile hovers over)
-                self.owner[c] = i
+        self.moves, self.owner = self._prepare(config)
         self.taken: set[int] = set()
         self.choice: list[int | None] = [None] * m
         for i, cells in pinned.items():
@@ -92,12 +97,32 @@ class Bille(_Generator):
                 self._claim(i, 0)
             for j in sorted({self.owner[c] for c in cells if self.owner.get(c, i) != i}):
                 if self.choice[j] is None:
-                    self._decide(j, frozenset(cells))
+                    self._decide(j, frozenset(cells), i)
         for i in order:
             if self.choice[i] is None:
                 self._decide(i, None)
         actions = tuple(self.moves[i][k][0] for i, k in enumerate(self.choice))
         return actions, tuple(self.moves[i][k][1] for i, k in enumerate(self.choice))
+
+    def _prepare(self, config: Poses) -> tuple[list, dict[int, int]]:
+        """Every robot's moves at ``config`` and the robot standing on each cell (kept for the
+        configurations the search comes back to)."""
+        def make():
+            moves = [self.problem.moves(i, p) for i, p in enumerate(config)]
+            owner = {}
+            for i, options in enumerate(moves):
+                for c in options[0][2]:  # waiting: the cells the robot stands on (and its tile hovers over)
+                    owner[c] = i
+            return moves, owner
+
+        return self._configs.get(config, make)
+
+    def compatible(self, config: Poses, forced: tuple, i: int) -> list[int]:
+        """Robot ``i``'s moves at ``config`` that the ``forced`` moves leave possible."""
+        moves, owner = self._prepare(config)
+        used = set().union(*(moves[j][k][2] for j, k in forced))
+        return [k for k, (_, _, cells) in enumerate(moves[i])
+                if used.isdisjoint(cells) and all(owner.get(c, i) == i for c in cells)]
 
     def _free(self, i: int, cells) -> bool:
         owner = self.owner
@@ -107,32 +132,72 @@ class Bille(_Generator):
         self.choice[i] = k
         self.taken.update(self.moves[i][k][2])
 
-    def _decide(self, i: int, avoid: frozenset | None) -> None:
-        """Choose robot ``i``'s move; ``avoid``: the cells its pusher wants (leave them)."""
+    def _decide(self, i: int, avoid: frozenset | None, pusher: int | None = None) -> bool:
+        """Choose robot ``i``'s move; ``avoid``: the cells robot ``pusher`` wants next step.
+        True when ``i`` makes progress: pushed, it comes closer to a pose clear of ``avoid``
+        (:meth:`_escape`), or pushes the robots in the way of a move that would; unpushed, it
+        comes closer to its goal, or pushes for a move that would. False when it cannot."""
         self.active.add(i)
         dist = self.problem.dist_lists[i]
-        walk = self.problem.walks[i]
-        ranked = []
-        for k, (a, q, cells) in enumerate(self.moves[i]):
-            stays = avoid is not None and not avoid.isdisjoint(walk.moves(q)[0][2])
-            ranked.append((stays, dist[q], k != 0, self.rng.random(), k))  # ties: rather wait
-        ranked.sort()
-        here = dist[self.config[i]]
-        pushed = False
-        for stays, d, _, _, k in ranked:
-            cells = self.moves[i][k][2]
-            if any(c in self.taken for c in cells):
+        moves = self.moves[i]
+        here = self.config[i]
+        if avoid is None:
+            rank, now = dist, dist[here]
+        else:
+            rank = self._escape(i, avoid, self.moves[pusher][0][2])
+            now = rank.get(here, ESCAPE_DEPTH + 1)
+        ranked = sorted((rank.get(q, ESCAPE_DEPTH + 1) if avoid is not None else dist[q], dist[q], k != 0,
+                         self.rng.random(), k) for k, (_, q, _) in enumerate(moves))  # ties: rather wait
+        owner, taken, choice, active = self.owner, self.taken, self.choice, self.active
+        for score, _, _, _, k in ranked:
+            cells = moves[k][2]
+            if not taken.isdisjoint(cells):
                 continue
-            blockers = {self.owner[c] for c in cells if self.owner.get(c, i) != i}
+            blockers = {owner[c] for c in cells if owner.get(c, i) != i}
             if not blockers:
                 self._claim(i, k)
-                return
-            if not pushed and (d < here or avoid is not None):
-                pushed = True
-                for j in sorted(blockers):
-                    if self.choice[j] is None and j not in self.active:
-                        self._decide(j, frozenset(cells))
+                return score < now
+            if score < now and all(choice[j] is None and j not in active for j in blockers):
+                # push: the blockers make way now, ``i`` follows next step (rule 3: nobody enters a
+                # cell another robot stands on); when one cannot, the next move is tried
+                if all([self._decide(j, cells, i) for j in sorted(blockers)]):
+                    self._claim(i, 0)
+                    return True
         self._claim(i, 0)  # waiting is always free: nobody claims cells another robot stands on
+        return False
+
+    def _escape(self, i: int, avoid: frozenset, keep_out: frozenset) -> dict[int, int]:
+        """Steps from the poses near robot ``i`` (at most :data:`ESCAPE_DEPTH` moves away) to a
+        pose whose cells miss ``avoid``, walking around ``keep_out`` (the pusher's cells) and
+        ignoring other robots. A biped keeps one foot down every step, so a robot with both feet
+        where its pusher wants to go needs two steps at least, and in a corridor more."""
+        walk = self.problem.walks[i]
+        start = self.config[i]
+        return self._escapes.get((id(walk), start, avoid, keep_out),
+                                 lambda: self._escape_steps(walk, start, avoid, keep_out))
+
+    @staticmethod
+    def _escape_steps(walk, start: int, avoid: frozenset, keep_out: frozenset) -> dict[int, int]:
+        seen, frontier, back = {start}, [start], {}
+        for _ in range(ESCAPE_DEPTH):
+            ahead = []
+            for p in frontier:
+                for _, q, cells in walk.moves(p):
+                    if q == p or not keep_out.isdisjoint(cells):
+                        continue
+                    back.setdefault(q, []).append(p)
+                    if q not in seen:
+                        seen.add(q)
+                        ahead.append(q)
+            frontier = ahead
+        steps = {q: 0 for q in seen if avoid.isdisjoint(walk.moves(q)[0][2])}
+        queue = list(steps)
+        for q in queue:
+            for p in back.get(q, ()):
+                if p not in steps:
+                    steps[p] = steps[q] + 1
+                    queue.append(p)
+        return steps
 
 
 class Classic(_Generator):
@@ -145,18 +210,33 @@ class Classic(_Generator):
 
     def __init__(self, problem, rng: random.Random) -> None:
         super().__init__(problem, rng)
+        self._configs = LRU(64)
         self.prefer: list[dict[int, int]] | None = None  # per robot: its SUO path's next cell (.scatter)
         walk = problem.walks[0]
         self.nbrs = [[q for q in row if q >= 0 and q != v] if standing else []
                      for v, (row, standing) in enumerate(zip(walk.succ.tolist(), walk.standing.tolist()))]
 
+    def _prepare(self, config: Poses) -> tuple[list, dict[int, int]]:
+        """Every robot's moves at ``config`` and the robot at each cell (kept for the
+        configurations the search comes back to)."""
+        moves = self.problem.moves
+        return self._configs.get(config, lambda: ([moves(i, p) for i, p in enumerate(config)],
+                                                  {p: i for i, p in enumerate(config)}))
+
+    def compatible(self, config: Poses, forced: tuple, i: int) -> list[int]:
+        """Robot ``i``'s moves at ``config`` that the ``forced`` moves leave possible (no
+        vertex or swap conflict with them)."""
+        moves, here = self._prepare(config)
+        ends = {moves[j][k][1]: j for j, k in forced}
+        return [k for k, (_, q, _) in enumerate(moves[i])
+                if q not in ends and not any(j == here.get(q, i) != i and moves[j][kk][1] == config[i]
+                                             for j, kk in forced)]
+
     def generate(self, config: Poses, order: list[int], forced: tuple,
                  pinned: dict[int, frozenset]) -> tuple[tuple[int, ...], Poses] | None:
         m = len(config)
         self.config = config
-        moves = self.problem.moves
-        self.moves = [moves(i, p) for i, p in enumerate(config)]
-        self.here = {p: i for i, p in enumerate(config)}
+        self.moves, self.here = self._prepare(config)
         self.next_at: dict[int, int] = {}
         self.choice: list[int | None] = [None] * m
         for i, k in forced:
