@@ -29,7 +29,10 @@ bound in turn, until they meet (``optimal``) or the time runs out (``feasible``,
      from the start to the goal: proved infeasible, it is a lower bound of its own, equal to the
      makespan, and so is the shortest schedule it finds when it proves that none is shorter; the
      run ends ``optimal`` (``windows.proved_bound``), proved from the top while the bound search
-     climbs from below.
+     climbs from below. A second, *kept* search takes turns with it: the same windows, twice as
+     long to start with, re-solved among the parts that pick and place only where the window's
+     first and last states differ; its models are a fraction of the size, it proves nothing
+     (:mod:`.windows`).
 
 Robots subsets as neighbourhoods (fix the other robots' paths) cannot shorten a makespan unless the
 robots they leave out already finish early, so only time windows are searched.
@@ -42,8 +45,8 @@ the parent.
 ``stats``: ``first`` (method, makespan, seconds), ``improvements`` ([seconds, makespan] for every
 shorter schedule), ``lower_bounds`` ([seconds, bound] for every rise), ``windows`` (tried,
 shortened, proved not to shorten, undecided; ``proved_bound`` where the whole schedule's window
-proved it optimal), ``bound_search`` (where the bound search ran), and the seconds spent on each
-search.
+proved it optimal), ``kept_windows`` (the same counts of the kept search), ``bound_search``
+(where the bound search ran), and the seconds spent on each search.
 """
 from __future__ import annotations
 
@@ -131,9 +134,12 @@ class _Anytime:
         self.parallel, self.bound_solver, self.report = parallel, bound_solver, report
         self.end = bracket.start + time_limit
         self.cut: list = []  # the first schedule's runs that ran out of their share
-        self.windows = Windows(instance, bracket, solver, window, slice_s, swap, self.end)
+        # the free and the kept neighbourhood search, in turn; the kept one's windows twice as long
+        self.windows = [Windows(instance, bracket, solver, window, slice_s, swap, self.end),
+                        Windows(instance, bracket, solver, 2 * window, slice_s, swap, self.end, kept=True)]
         self.stats = {"improvements": bracket.improvements, "lower_bounds": bracket.lower_bounds,
-                      "windows": self.windows.counts, "bound_s": 0.0, "search_s": 0.0}
+                      "windows": self.windows[0].counts, "kept_windows": self.windows[1].counts,
+                      "bound_s": 0.0, "search_s": 0.0}
 
     def left(self) -> float:
         return self.end - time.perf_counter()
@@ -171,7 +177,8 @@ class _Anytime:
                 if bracket.closed:
                     continue
                 began = time.perf_counter()
-                self.windows.step(min(self.end, began + self.slice))
+                self.windows[0].step(min(self.end, began + self.slice))
+                self.windows.reverse()
                 self.stats["search_s"] += time.perf_counter() - began
             rise.step(time.perf_counter())  # what the bound search sent while the last part ran
         except KeyboardInterrupt:  # Ctrl-C, or a subscriber that raised it: keep what is held

@@ -1,5 +1,13 @@
 """The neighbourhood search of :mod:`.anytime`: time windows of the best schedule re-solved
-exactly in fewer steps (that module's docstring, "Shortening the schedule")."""
+exactly in fewer steps (that module's docstring, "Shortening the schedule").
+
+Two searches take turns. The *free* one re-solves a window under every rule: a window over the
+whole schedule proved not to shorten is a proof of optimality. The *kept* one re-solves a window
+among the parts that pick and place only on the cells where the window's first and last states
+differ (``Options.keep_structure`` on the window's sub-instance). It is a restriction, so it proves
+nothing about the instance, but its models are a fraction of the size (lt-1, a window of 24 steps:
+32 k variables against 147 k), so it decides windows two to four times as long in the same time.
+"""
 from __future__ import annotations
 
 import dataclasses
@@ -30,8 +38,9 @@ class Windows:
     proved not to shorten, undecided; ``proved_bound`` once the whole schedule's window proved one."""
 
     def __init__(self, instance: Instance, bracket: Bracket, solver: str, length: int, budget: float, swap: bool,
-                 end: float) -> None:
+                 end: float, kept: bool = False) -> None:
         self.instance, self.bracket, self.solver, self.swap, self.end = instance, bracket, solver, swap, end
+        self.kept = kept
         self.length = length
         self.budget = budget  # seconds per window: grows by half after an undecided one
         self.done: set = set()  # (schedule key, a, b) proved not to shorten
@@ -64,7 +73,10 @@ class Windows:
 
     def _proved(self, bound: int) -> str:
         """The window over the whole schedule is the exact search from the start to the goal: no
-        schedule shorter than ``bound`` in it means none at all, a lower bound of its own."""
+        schedule shorter than ``bound`` in it means none at all, a lower bound of its own (not
+        under the restriction of the kept search)."""
+        if self.kept:
+            return UNSAT
         self.counts["proved_bound"] = bound
         self.bracket.prove(bound)
         return UNSAT
@@ -84,7 +96,8 @@ class Windows:
         if L < 1:
             return self._proved(best.makespan) if whole else UNSAT
         try:
-            model = build(sub, L, Options(), min_done=1, deadline=until, end=end, swap=self.swap)
+            model = build(sub, L, Options(keep_structure=self.kept), min_done=1, deadline=until, end=end,
+                          swap=self.swap)
         except OutOfTime:
             counts["undecided"] += 1
             return UNKNOWN
