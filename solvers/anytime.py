@@ -16,7 +16,10 @@ bound in turn, until they meet (``optimal``) or the time runs out (``feasible``,
      bound up, one model per horizon (its pruning is tightest there). An infeasible horizon ``k``
      proves that no schedule is shorter than ``k + 1``; a satisfiable one is an optimal schedule.
      One CP-SAT worker decides each horizon (``bound_solver``; a python-sat solver instead keeps
-     what it learned on an undecided horizon for the next slice).
+     what it learned on an undecided horizon for the next slice). While the neighbourhood search
+     has shortened nothing for a tenth of the time limit, this process decides a horizon above
+     the child's, the highest it expects to decide in time (:class:`.rise.Ahead`; an infeasible
+     horizon proves the ones below it infeasible too).
    - **Shortening the schedule**: large neighbourhood search over time windows (after MAPF-LNS,
      Li et al., IJCAI 2021). A window ``[a, b]`` of the schedule is re-solved exactly with the
      time-expanded model: from the state at ``a`` (tiles, poses, loads) to exactly the state at
@@ -29,10 +32,10 @@ bound in turn, until they meet (``optimal``) or the time runs out (``feasible``,
      from the start to the goal: proved infeasible, it is a lower bound of its own, equal to the
      makespan, and so is the shortest schedule it finds when it proves that none is shorter; the
      run ends ``optimal`` (``windows.proved_bound``), proved from the top while the bound search
-     climbs from below. A second, *kept* search takes turns with it: the same windows, twice as
-     long to start with, re-solved among the parts that pick and place only where the window's
-     first and last states differ; its models are a fraction of the size, it proves nothing
-     (:mod:`.windows`).
+     climbs from below. A second, *kept* search takes turns with it (the one that shortened the
+     schedule in its last slice keeps the turn): the same windows, twice as long to start with,
+     re-solved among the parts that pick and place only where the window's first and last states
+     differ; its models are a fraction of the size, it proves nothing (:mod:`.windows`).
 
 Robots subsets as neighbourhoods (fix the other robots' paths) cannot shorten a makespan unless the
 robots they leave out already finish early, so only time windows are searched.
@@ -46,7 +49,8 @@ the parent.
 shorter schedule), ``lower_bounds`` ([seconds, bound] for every rise), ``windows`` (tried,
 shortened, proved not to shorten, undecided; ``proved_bound`` where the whole schedule's window
 proved it optimal), ``kept_windows`` (the same counts of the kept search), ``bound_search``
-(where the bound search ran), and the seconds spent on each search.
+(where the bound search ran), ``ahead`` ([horizon, answer, seconds] decided out of turn), and the
+seconds spent on each search.
 """
 from __future__ import annotations
 
@@ -65,7 +69,7 @@ from bille.instances.schedule import Schedule
 from .bounds import Bounds, lower_bound
 from .bracket import Bracket
 from .incumbent import EXHAUSTED, Incumbent, complete_search, fewer_robots, first_schedule, from_schedule, retry
-from .rise import FORK, Background, Rise
+from .rise import FORK, Ahead, Background, Rise
 from .windows import Windows
 
 
@@ -134,7 +138,8 @@ class _Anytime:
         self.parallel, self.bound_solver, self.report = parallel, bound_solver, report
         self.end = bracket.start + time_limit
         self.cut: list = []  # the first schedule's runs that ran out of their share
-        # the free and the kept neighbourhood search, in turn; the kept one's windows twice as long
+        # the free and the kept neighbourhood search, in turn after a slice that shortened nothing;
+        # the kept one's windows twice as long
         self.windows = [Windows(instance, bracket, solver, window, slice_s, swap, self.end),
                         Windows(instance, bracket, solver, 2 * window, slice_s, swap, self.end, kept=True)]
         self.stats = {"improvements": bracket.improvements, "lower_bounds": bracket.lower_bounds,
@@ -156,10 +161,12 @@ class _Anytime:
         why = self._in_turns()
         background = why is None
         self.stats["bound_search"] = "child process" if background else f"in turns: {why}"
-        rise, seek, stopped = None, None, False
+        rise, ahead, seek, stopped = None, None, None, False
         try:
             if background:  # the bound search starts at once, beside the heuristics
                 rise = Background(inst, self.bound_solver, bracket, self.end)
+                ahead = Ahead(inst, self.bound_solver, bracket, rise, self.end)
+                self.stats["ahead"] = ahead.tried
             self._first(first)
             rise = rise or Rise(inst, self.bound_solver, bracket, self.end)
             seek = _Seek(inst, self.cut, bracket.start, self.end)
@@ -176,10 +183,15 @@ class _Anytime:
                     continue
                 if bracket.closed:
                     continue
-                began = time.perf_counter()
+                began, makespan = time.perf_counter(), bracket.best.makespan
                 self.windows[0].step(min(self.end, began + self.slice))
-                self.windows.reverse()
+                if bracket.best.makespan == makespan:  # the search that shortened it last goes on
+                    self.windows.reverse()
                 self.stats["search_s"] += time.perf_counter() - began
+                if ahead is not None and self._stalled() and (pick := ahead.pick()) is not None:
+                    began = time.perf_counter()
+                    ahead.run(*pick)
+                    self.stats["bound_s"] += time.perf_counter() - began
             rise.step(time.perf_counter())  # what the bound search sent while the last part ran
         except KeyboardInterrupt:  # Ctrl-C, or a subscriber that raised it: keep what is held
             stopped = True
@@ -194,6 +206,12 @@ class _Anytime:
         if bracket.best is None:
             return self.result("timeout")
         return self.result("optimal" if bracket.closed else "feasible")
+
+    def _stalled(self) -> bool:
+        """Whether the best schedule has not shortened for a tenth of the time limit (at least 5 s):
+        then this process may help the bound search (:class:`.rise.Ahead`)."""
+        since = self.bracket.elapsed() - self.bracket.improvements[-1][0]
+        return since >= max(5.0, 0.1 * (self.end - self.bracket.start))
 
     def _in_turns(self) -> str | None:
         """Why the bound search takes turns with the rest instead of running in a child process

@@ -5,6 +5,13 @@ search (:class:`Rise`) or in a child process on a core of its own (:class:`Backg
 An infeasible horizon ``k`` proves that no schedule is shorter than ``k + 1``; a satisfiable one
 is an optimal schedule. A python-sat solver keeps what it learned on an undecided horizon for the
 next slice.
+
+A horizon's model admits every schedule of at most ``k`` steps (robots wait once done), so an
+infeasible horizon proves every horizon below it infeasible too: a horizon may be decided out of
+turn. :class:`Ahead` does so in the parent while the neighbourhood search finds nothing: it
+decides one horizon above the child's, the highest whose proof it expects to see before the end
+(each horizon taken to cost at least twice the one below it, as measured on bridge-2 from horizon
+17 up), and the child, if the proof passes it, starts again above it.
 """
 from __future__ import annotations
 
@@ -14,7 +21,7 @@ import time
 
 import numpy as np
 
-from bille.encodings import SAT, UNKNOWN
+from bille.encodings import SAT, UNKNOWN, UNSAT
 from bille.encodings.backend import open_backend
 from bille.encodings.model import Options, OutOfTime, build
 from bille.encodings.solution import decode
@@ -39,12 +46,15 @@ class Rise:
         self.k = max(1, bracket.lower)
         self.model = self.backend = None
         self.finished = False  # an optimal schedule was found
+        self.began = None  # when the horizon k began, and the seconds each horizon decided took
+        self.seconds: dict[int, float] = {}
 
     def step(self, until: float) -> None:
         """Search until ``until`` (or the bracket closes)."""
         inst, bracket = self.instance, self.bracket
         while time.perf_counter() < until and not bracket.closed:
             if self.backend is None:
+                self.began = self.began or time.perf_counter()
                 try:
                     self.model = build(inst, self.k, Options(), deadline=self.end)
                 except OutOfTime:
@@ -62,6 +72,8 @@ class Rise:
                 self.finished = True
                 self.close()
                 return
+            self.seconds[self.k] = time.perf_counter() - self.began
+            self.began = None
             bracket.prove(self.k + 1)
             self.close()
             self.k = max(self.k + 1, bracket.lower)
@@ -73,13 +85,20 @@ class Rise:
 
 
 class Background:
-    """:class:`Rise` in a child process: it sends each proved bound, or an optimal schedule,
-    through a pipe; :meth:`step` reads them into ``bracket`` until ``until``."""
+    """:class:`Rise` in a child process: it sends each proved bound (with the seconds its horizon
+    took), or an optimal schedule, through a pipe; :meth:`step` reads them into ``bracket`` until
+    ``until``. ``k`` is the horizon the child is on, ``seconds`` what each horizon it refuted took."""
 
     def __init__(self, instance: Instance, solver: str, bracket: Bracket, end: float) -> None:
-        self.instance, self.bracket = instance, bracket
+        self.instance, self.solver, self.bracket, self.end = instance, solver, bracket, end
+        self.seconds: dict[int, float] = {}
+        self._start()
+
+    def _start(self) -> None:
+        self.k = self.bracket.lower
         self.inbox, outbox = FORK.Pipe(duplex=False)
-        self.child = FORK.Process(target=_rise_child, args=(instance, solver, bracket.lower, end, outbox), daemon=True)
+        self.child = FORK.Process(target=_rise_child, args=(self.instance, self.solver, self.k, self.end, outbox),
+                                  daemon=True)
         # the terminal's Ctrl-C goes to the whole process group: the child ignores it (the parent
         # stops it), and is born with it held back, so that none lands before it is ignored
         held = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
@@ -94,6 +113,11 @@ class Background:
         finally:
             outbox.close()
 
+    def restart(self) -> None:
+        """Start again from the bracket's bound (a proof made elsewhere passed the child's horizon)."""
+        self.close()
+        self._start()
+
     def step(self, until: float) -> None:
         inst, bracket = self.instance, self.bracket
         while not bracket.closed:
@@ -104,6 +128,10 @@ class Background:
             except EOFError:
                 return
             if kind == "lower":
+                value, seconds = value
+                if seconds is not None:
+                    self.seconds[value - 1] = seconds
+                self.k = max(self.k, value)
                 bracket.prove(value)
             else:
                 found = from_schedule(inst, Schedule.from_ids(inst, np.array(value)), "exact")
@@ -120,14 +148,70 @@ class Background:
         self.inbox.close()
 
 
+class Ahead:
+    """One horizon above the :class:`Background` child's, decided in this process (module
+    docstring); ``tried`` lists ``[horizon, answer, seconds]``."""
+
+    GROWTH = 2.0  # each horizon's proof is taken to cost at least this many times the one below
+
+    def __init__(self, instance: Instance, solver: str, bracket: Bracket, child: Background, end: float) -> None:
+        self.instance, self.solver, self.bracket, self.child, self.end = instance, solver, bracket, child, end
+        self.tried: list = []
+
+    def pick(self) -> tuple[int, float] | None:
+        """The highest horizon above the child's, below the best schedule's makespan and not tried
+        yet, whose proof is expected within most of the time left, with the seconds expected; None
+        before the child refuted two horizons."""
+        bracket, seconds = self.bracket, self.child.seconds
+        done = sorted(k for k in seconds if k < bracket.lower)
+        if len(done) < 2 or bracket.best is None:
+            return None
+        k, last = done[-1], max(seconds[done[-1]], 1e-3)
+        growth = max(self.GROWTH, last / max(seconds[done[-2]], 1e-3))
+        left, tried = self.end - time.perf_counter(), {h for h, _, _ in self.tried}
+        pick = None
+        for h in range(max(self.child.k, bracket.lower) + 1, bracket.best.makespan):
+            expected = last * growth ** (h - k)
+            if expected > 0.8 * left:
+                break
+            if h not in tried:
+                pick = (h, expected)
+        return pick
+
+    def run(self, h: int, expected: float) -> None:
+        """Decide horizon ``h``, for at most twice the seconds expected (at least 5)."""
+        inst, bracket = self.instance, self.bracket
+        began = time.perf_counter()
+        deadline = min(self.end, began + max(2 * expected, 5.0))
+        answer = UNKNOWN
+        try:
+            model = build(inst, h, Options(), deadline=deadline)
+            with open_backend(self.solver, model, inst) as backend:
+                outcome = backend.solve(deadline=deadline)
+            answer = outcome.status
+        except OutOfTime:
+            pass
+        finally:
+            self.tried.append([h, answer, round(time.perf_counter() - began, 3)])
+        if answer == UNSAT:  # no schedule of h steps or fewer
+            bracket.prove(h + 1)
+            if self.child.k <= h:
+                self.child.restart()
+        elif answer == SAT:
+            found = from_schedule(inst, Schedule.from_ids(inst, decode(model, inst, outcome.value)), "exact")
+            if found is None:
+                raise RuntimeError(f"anytime: the exact model gave an invalid schedule at horizon {h}")
+            bracket.offer(found)
+
+
 def _rise_child(instance: Instance, solver: str, lower: int, end: float, outbox) -> None:
     """The child's loop: raise the bound until ``end`` or an optimal schedule, sending each news."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
     bracket = Bracket(lower)
-    bracket.on_bound.append(lambda value: outbox.send(("lower", value)))
-    bracket.on_schedule.append(lambda found: outbox.send(("optimal", found.ids.tolist())))
     rise = Rise(instance, solver, bracket, end)
+    bracket.on_bound.append(lambda value: outbox.send(("lower", (value, rise.seconds.get(value - 1)))))
+    bracket.on_schedule.append(lambda found: outbox.send(("optimal", found.ids.tolist())))
     while time.perf_counter() < end:
         rise.step(end)
         if rise.finished:
