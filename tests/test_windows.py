@@ -52,3 +52,46 @@ def test_kept_windows_shorten_where_they_can():
     assert search.shorten(best, 0, best.makespan, time.perf_counter() + 30) == SAT
     assert bracket.best.makespan == 4 and bracket.lower == 1
     assert validate(inst, Schedule.from_ids(inst, bracket.best.ids)).valid
+
+
+class _Child:
+    """The part of a background bound search that :class:`Ahead` reads: its horizon, the seconds
+    of the horizons it refuted, and restarts."""
+
+    def __init__(self, k, seconds):
+        self.k, self.seconds, self.restarts = k, seconds, 0
+
+    def restart(self):
+        self.restarts += 1
+
+
+def test_a_horizon_decided_ahead_of_the_bound_search():
+    from bille.solvers.rise import Ahead
+
+    # one point robot four cells from its goal: the optimum is 4, horizons 1-3 are infeasible
+    inst = make(".....\nTTTTT\n.....", [{"at": [0, 1]}], moveset="point", robot_goals=[[4, 1]])
+    best = from_schedule(inst, sched("east east west east east east"), "detour")
+    bracket = Bracket(lower=2, best=best)
+    child = _Child(2, {0: 0.001, 1: 0.001})  # refuted horizons 0 and 1, now on 2
+    ahead = Ahead(inst, "cpsat", bracket, child, time.perf_counter() + 60)
+    assert ahead.pick()[0] == 5  # the highest below the best schedule's 6 steps
+    ahead.run(*ahead.pick())
+    assert bracket.best.makespan <= 5 and validate(inst, Schedule.from_ids(inst, bracket.best.ids)).valid
+    assert bracket.lower == 2 and child.restarts == 0  # a satisfiable horizon proves nothing
+    h, expected = ahead.pick()
+    assert h < bracket.best.makespan and h not in (5,)
+    while (pick := ahead.pick()) is not None:
+        ahead.run(*pick)
+    assert bracket.lower == 4 == bracket.best.makespan and child.restarts >= 1  # 3 refuted: 4 is optimal
+    assert [h for h, answer, _ in ahead.tried if answer == UNSAT] == [3]
+
+
+def test_no_horizon_is_decided_ahead_before_two_are_refuted():
+    from bille.solvers.rise import Ahead
+
+    inst = make(".....\nTTTTT\n.....", [{"at": [0, 1]}], moveset="point", robot_goals=[[4, 1]])
+    bracket = Bracket(lower=2, best=from_schedule(inst, sched("east east west east east east"), "detour"))
+    assert Ahead(inst, "cpsat", bracket, _Child(2, {1: 0.001}), time.perf_counter() + 60).pick() is None
+    # a horizon expected to take longer than the time left is not tried
+    slow = _Child(2, {0: 50.0, 1: 100.0})
+    assert Ahead(inst, "cpsat", bracket, slow, time.perf_counter() + 60).pick() is None
