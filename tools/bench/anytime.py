@@ -9,11 +9,9 @@ of the same run.
 """
 from __future__ import annotations
 
-from bille.instances import load_instance
-from bille.instances.bundled import bundled_path
 from bille.solvers import solve
 
-from ..common import solved
+from ..common import instance_arg, solved
 from ..tables import text_table
 
 
@@ -21,25 +19,20 @@ def _gap(makespan, lower):
     return None if makespan is None or not lower else f"{100.0 * (makespan - lower) / lower:.1f}%"
 
 
-def rows(names: list[str], time_limit: float, progress=None, out: list | None = None) -> list[dict]:
-    """One row per map, appended to ``out`` (if given) as it is measured."""
-    out = [] if out is None else out
-    for name in names:
-        inst = load_instance(bundled_path(name))
-        if progress:
-            progress(name)
-        paper = solved(solve(inst, "temporal-astar", time_limit=time_limit))
-        from_paper = None
-        if paper.schedule is not None:
-            from_paper = solved(solve(inst, "anytime", time_limit=time_limit, incumbent=paper.schedule))
-        own = solved(solve(inst, "anytime", time_limit=time_limit))
-        runs = [r for r in (paper, from_paper, own) if r is not None]
-        lower = max(r.lower_bound for r in runs if r.lower_bound is not None)
-        span = {key: (r.metrics.makespan if r is not None and r.metrics else None)
-                for key, r in (("paper", paper), ("from_paper", from_paper), ("own", own))}
-        out.append(dict(instance=name, paper_status=paper.status, lower_bound=lower, **span,
-                        own_status=own.status, own_first=own.stats.get("first", {}).get("makespan")))
-    return out
+def row(arg: str, time_limit: float) -> dict:
+    """The measured row of one map (an instance file or a bundled name)."""
+    inst = instance_arg(arg)
+    paper = solved(solve(inst, "temporal-astar", time_limit=time_limit))
+    from_paper = None
+    if paper.schedule is not None:
+        from_paper = solved(solve(inst, "anytime", time_limit=time_limit, incumbent=paper.schedule))
+    own = solved(solve(inst, "anytime", time_limit=time_limit))
+    runs = [r for r in (paper, from_paper, own) if r is not None]
+    lower = max(r.lower_bound for r in runs if r.lower_bound is not None)
+    span = {key: (r.metrics.makespan if r is not None and r.metrics else None)
+            for key, r in (("paper", paper), ("from_paper", from_paper), ("own", own))}
+    return dict(instance=inst.name, paper_status=paper.status, lower_bound=lower, **span, own_status=own.status,
+                own_first=own.stats.get("first", {}).get("makespan"))
 
 
 def table(rows: list[dict]) -> list[str]:

@@ -10,12 +10,18 @@ import click
 
 from bille.instances.bundled import bundled_path
 
-from ..common import EXIT_INTERRUPTED, EXIT_NO, EXIT_OK, instance_arg, output_folder
+from ..common import EXIT_NO, EXIT_OK, instance_arg, output_folder
+from .args import counts as _counts, names as _names, stopped as _stopped
+from .solving import bench_anytime, bench_gaps
 
 
 @click.group()
 def bench() -> None:
     """Benchmarks: figures measured on this machine, with ratios to baselines of the same run."""
+
+
+bench.add_command(bench_anytime)
+bench.add_command(bench_gaps)
 
 
 @bench.command("core")
@@ -56,55 +62,6 @@ def bench_execute(sizes: str, steps: int, broker: str | None, step_timeout: floa
     for line in report(counts, steps, broker, step_timeout, connect_timeout, failed):
         click.echo(line)
     return EXIT_NO if failed else EXIT_OK
-
-
-@bench.command("anytime")
-@click.option("--time-limit", type=click.FloatRange(min=1), default=60.0, show_default=True,
-              help="Seconds per run (three runs per map).")
-@click.option("--maps", default=",".join(f"lt-{k}" for k in range(1, 9)), show_default=True,
-              help="Comma-separated bundled maps.")
-def bench_anytime(time_limit: float, maps: str) -> int:
-    """How far anytime certified solving improves the paper's method: makespans, the lower bound
-    proved, certified gaps."""
-    from .anytime import rows, table
-
-    names = _names(maps)
-    for name in names:
-        bundled_path(name)  # unknown names fail here, before any work
-    found: list[dict] = []
-    try:
-        rows(names, time_limit, progress=lambda name: click.echo(f"  {name} ...", err=True), out=found)
-    except KeyboardInterrupt:  # the maps measured before are shown all the same
-        return _stopped(table(found), f"{len(found)} of {len(names)} maps measured")
-    for line in table(found):
-        click.echo(line)
-    return EXIT_OK
-
-
-@bench.command("gaps")
-@click.option("--time-limit", type=click.FloatRange(min=1), default=60.0, show_default=True,
-              help="Seconds of anytime solving per instance.")
-@click.option("--maps", default=",".join([f"lt-{k}" for k in range(1, 9)] + ["bridge-2"]), show_default=True,
-              help="Comma-separated instance files or bundled names.")
-def bench_gaps(time_limit: float, maps: str) -> int:
-    """Certified gaps of anytime solving, and what proved each end: the static bound and its
-    strongest part, the bound reached and how, the best schedule and which search shortened it."""
-    from ..common import instance_arg
-    from .gaps import row, table
-
-    names = _names(maps)
-    for name in names:
-        instance_arg(name)  # a bad file or name fails here, before any work
-    found: list[dict] = []
-    try:
-        for name in names:
-            click.echo(f"  {name} ...", err=True)
-            found.append(row(name, time_limit))
-    except KeyboardInterrupt:
-        return _stopped(table(found), f"{len(found)} of {len(names)} instances measured")
-    for line in table(found):
-        click.echo(line)
-    return EXIT_OK
 
 
 @bench.command("imports", context_settings={"ignore_unknown_options": True})
@@ -375,27 +332,3 @@ def bench_scale(robots: str, obstacles: str, size: int, seed: int, time_limit: f
     for line in scale_table(rows):
         click.echo(line)
     return EXIT_OK
-
-
-def _stopped(lines, what: str) -> int:
-    """Print what a benchmark measured before Ctrl-C, and the exit code of an interruption."""
-    for line in lines:
-        click.echo(line)
-    click.echo(f"bille bench: interrupted; {what}", err=True)
-    return EXIT_INTERRUPTED
-
-
-def _names(text: str) -> list[str]:
-    """The non-empty entries of a comma-separated option."""
-    return [part.strip() for part in text.split(",") if part.strip()]
-
-
-def _counts(text: str, option: str, what: str) -> list[int]:
-    """The whole numbers (each at least 1) of a comma-separated option; ``what`` names them."""
-    try:
-        counts = [int(v) for v in _names(text)]
-    except ValueError:
-        raise click.BadParameter(f"{text!r}: expected numbers like 10,50", param_hint=option) from None
-    if not counts or min(counts) < 1:
-        raise click.BadParameter(f"{text!r}: {what} must be at least 1", param_hint=option)
-    return counts
