@@ -2,7 +2,9 @@
 import re
 from pathlib import Path
 
+import click
 import pytest
+from doccommands import bille_args, documents, lines_of
 
 from bille.instances import load_moveset
 from bille.tools.render import motion_diagram
@@ -44,12 +46,74 @@ def test_readme_and_docs_pictures_exist():
             assert picture.is_file() and picture.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", f"{doc.name}: {target}"
 
 
-def test_readme_commands_exist():
+DOC_COMMANDS = [(doc.name, line) for doc in documents() for line in lines_of(doc) if bille_args(line) is not None]
+
+
+def _parse(args: list[str]) -> click.Context:
+    """Parse ``bille ARGS`` as the command line would, down to the command that runs, without
+    running it; returns that command's context (its parameters converted and checked)."""
     from bille.tools.cli import cli
 
-    readme = (ROOT / "README.md").read_text()
-    blocks = "\n".join(re.findall(r"```bash\n(.*?)```", readme, re.S))
-    commands = [c for c in re.findall(r"^bille ([a-z-]+)", blocks, re.M) if not c.startswith("-")]
-    assert len(commands) > 10
-    for command in commands:
-        assert command in cli.commands, command
+    cmd, name, ctx = cli, "bille", None
+    while isinstance(cmd, click.Group) and args and not args[0].startswith("-"):
+        ctx = cmd.make_context(name, [], parent=ctx, resilient_parsing=True)
+        name, cmd, args = cmd.resolve_command(ctx, args)
+    return cmd.make_context(name, args, parent=ctx)
+
+
+def test_docs_have_commands():
+    pages = {doc for doc, _ in DOC_COMMANDS}
+    assert "README.md" in pages and {"anytime.md", "exact.md", "planners.md", "sweeps.md"} <= pages
+    assert len(DOC_COMMANDS) > 60
+
+
+@pytest.mark.parametrize("doc, line", DOC_COMMANDS, ids=[f"{doc}:{line[:60]}" for doc, line in DOC_COMMANDS])
+def test_docs_commands_parse(doc, line, monkeypatch):
+    """Every ``bille`` line of the README's and the docs' bash blocks names a command and options
+    that exist, with values of the right type, and methods and method options (``-O``, ``gap
+    --methods``) that exist; a file it names need not exist yet (an earlier line makes it)."""
+    from bille.solvers import METHODS
+    from bille.solvers.options import check_options
+    from bille.tools.gap import parse_configs
+    from bille.tools.solve_commands import _parse_options
+
+    for path_type in {id(p.type): p.type for p in _all_params() if isinstance(p.type, click.Path)}.values():
+        monkeypatch.setattr(path_type, "exists", False)
+    try:
+        ctx = _parse(bille_args(line))
+    except click.exceptions.Exit as stop:  # --help, --version
+        assert stop.exit_code == 0, line
+        return
+    except click.UsageError as exc:
+        pytest.fail(f"{doc}: {line}: {exc.format_message()}")
+    params = ctx.params
+    if ctx.command.name == "solve" and params["extra"]:
+        check_options(params["method"], METHODS[params["method"]], _parse_options(params["extra"]),
+                      internal=("bounds", "progress"))
+    if ctx.command.name == "gap":
+        parse_configs(params["methods"])
+
+
+def _all_params():
+    from bille.tools.cli import cli
+
+    stack = [cli]
+    while stack:
+        cmd = stack.pop()
+        yield from cmd.params
+        if isinstance(cmd, click.Group):
+            stack += cmd.commands.values()
+
+
+def test_doc_command_lines_are_read_whole(tmp_path):
+    doc = tmp_path / "page.md"
+    doc.write_text("text\n```bash\n# a comment\nbille solve lt-4 \\\n  -m cpsat   # why\n\nprintf 'oo' > g\n```\n"
+                   "```\nbille not-a-command\n```\n")
+    assert lines_of(doc) == ["bille solve lt-4    -m cpsat   # why", "printf 'oo' > g"]
+    assert bille_args(lines_of(doc)[0]) == ["solve", "lt-4", "-m", "cpsat"]
+    assert bille_args("python3.11 -m venv .venv && .venv/bin/bille gap") == ["gap"]
+    assert bille_args(lines_of(doc)[1]) is None
+    with pytest.raises(click.UsageError):
+        _parse(["solve", "lt-4", "--no-such-option"])
+    with pytest.raises(click.UsageError):
+        _parse(["sweep", "report"])

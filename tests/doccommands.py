@@ -1,0 +1,98 @@
+"""The commands of the README and docs/: every line of their ```bash blocks, in order.
+
+``tests/test_docs.py`` checks that each ``bille`` line parses (the command, its options and the
+methods and method options it names exist). Run as a script, this module runs them as a new user
+would, from a fresh clone with bille installed in ``.venv``::
+
+    python tests/doccommands.py OUT [--only README.md --only anytime.md] [--timeout 900]
+
+The README's lines run in the repository (they write into ``docs/``), each page of docs/ in a
+folder of its own under OUT, so that a page never leans on files another page made. Each line
+runs under ``nice`` with the ``bille`` of the interpreter running this script first on PATH, its
+output in ``OUT/logs``; at its time limit it gets SIGINT, as a terminal's Ctrl-C (exit 130), and
+SIGKILL 30 s later. A table of every line, its exit code and its seconds is printed at the end.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import shlex
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def documents(root: Path = ROOT) -> list[Path]:
+    """The README, then the pages of docs/ by name."""
+    return [root / "README.md", *sorted((root / "docs").glob("*.md"))]
+
+
+def lines_of(doc: Path) -> list[str]:
+    """The lines of the document's ```bash blocks, in order: continuation lines joined, blank
+    lines and lines that are only a comment left out."""
+    out = []
+    for block in re.findall(r"^```bash\n(.*?)^```", doc.read_text(), re.S | re.M):
+        for line in block.replace("\\\n", " ").splitlines():
+            if line.strip() and not line.lstrip().startswith("#"):
+                out.append(line.strip())
+    return out
+
+
+def bille_args(line: str) -> list[str] | None:
+    """The arguments after ``bille`` (or ``.venv/bin/bille``, the last command of a ``&&`` chain),
+    or None for a line that runs no bille command."""
+    words = shlex.split(line, comments=True)
+    chain = " ".join(words).split(" && ")[-1].split()
+    if chain and chain[0] in ("bille", ".venv/bin/bille"):
+        return chain[1:]
+    return None
+
+
+def run(out: Path, only: list[str], timeout: float) -> list[tuple[str, str, int, float]]:
+    """Run every line of the documents (or of those named in ``only``); see the module docstring."""
+    env = dict(os.environ, PATH=f"{Path(sys.executable).parent}{os.pathsep}{os.environ['PATH']}")
+    logs = out / "logs"
+    logs.mkdir(parents=True, exist_ok=True)
+    rows = []
+    for doc in documents():
+        if only and doc.name not in only:
+            continue
+        cwd = ROOT if doc.name == "README.md" else out / doc.stem
+        cwd.mkdir(parents=True, exist_ok=True)
+        for k, line in enumerate(lines_of(doc), 1):
+            if doc.name == "README.md" and k <= 2:  # the install and the test suite: run by hand
+                continue
+            export = re.fullmatch(r"export (\w+)=(\S+)(\s+#.*)?", line)
+            if export:
+                env[export.group(1)] = export.group(2)
+                rows.append((doc.name, line, 0, 0.0))
+                continue
+            log = logs / f"{doc.stem}-{k:02d}"
+            command = ["timeout", "-s", "INT", "-k", "30", str(timeout), "nice", "bash", "-c", line]
+            start = time.monotonic()
+            with open(f"{log}.out", "w") as stdout, open(f"{log}.err", "w") as stderr:
+                code = subprocess.call(command, cwd=cwd, env=env, stdin=subprocess.DEVNULL, stdout=stdout,
+                                       stderr=stderr)
+            rows.append((doc.name, line, code, time.monotonic() - start))
+            print(f"{doc.name}\t{code}\t{rows[-1][3]:.1f}\t{line}", flush=True)
+    return rows
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("out", type=Path, help="folder for the pages' working folders and the logs")
+    parser.add_argument("--only", action="append", default=[], help="a document's file name (repeatable)")
+    parser.add_argument("--timeout", type=float, default=900.0, help="seconds per line before Ctrl-C")
+    args = parser.parse_args()
+    rows = run(args.out.resolve(), args.only, args.timeout)
+    print("\n| document | command | exit | seconds |\n|---|---|---|---|")
+    for doc, line, code, seconds in rows:
+        print(f"| {doc} | `{line.split('  #')[0].strip()}` | {code} | {seconds:.1f} |")
+
+
+if __name__ == "__main__":
+    main()
