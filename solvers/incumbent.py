@@ -100,7 +100,7 @@ def retry(instance: Instance, cut: list, budget: float) -> Incumbent | None:
     return None
 
 
-def fewer_robots(instance: Instance, budget: float) -> Incumbent | None:
+def fewer_robots(instance: Instance, budget: float | None) -> Incumbent | None:
     """The first valid schedule the reconfiguration loop finds within ``budget`` seconds with
     fewer robots taking jobs (the loop's ``active``; the others only keep out of the way), or
     None: for when the loop with every robot finds none. On crowded maps the robots with jobs
@@ -110,7 +110,9 @@ def fewer_robots(instance: Instance, budget: float) -> Incumbent | None:
     every set before the next layer, each run within a quarter of the budget. The first schedule
     found is returned, compacted as in :func:`first_schedule`: runs that fail mostly take their
     whole share (a joint plan not found in time), so looking on for a shorter one costs the time
-    in which the windows shorten the first."""
+    in which the windows shorten the first. ``budget`` None: no time limit, each run ends at the
+    loop's own bounds (steps, priority shifts, the motion layers' expansions) and compaction at
+    its fixed point, so the answer does not depend on the machine's speed."""
     m = instance.num_robots
     if not instance.is_reconfiguration or instance.collisions == "classic" or m < 2:
         return None
@@ -121,7 +123,7 @@ def fewer_robots(instance: Instance, budget: float) -> Incumbent | None:
     return _portfolio(instance, runs, budget, improve=False, first=True)
 
 
-def compacted(instance: Instance, found: Incumbent, time_limit: float) -> Incumbent:
+def compacted(instance: Instance, found: Incumbent, time_limit: float | None) -> Incumbent:
     """``found`` with its actions as early as they go (:mod:`.compact`), if that is shorter and
     valid."""
     ids = compact(instance, found.ids, time_limit)
@@ -186,13 +188,15 @@ def _portfolio(instance: Instance, runs, budget: float, improve: bool, first: bo
     """The shortest valid schedule (the first one, if ``first``) of the ``runs`` (name, what to
     run for :func:`_run`, share of the budget) within ``budget`` seconds, each compacted; the runs
     that ran out of their time go to ``cut`` (name, what to run, seconds), if given."""
-    end = time.perf_counter() + budget
+    end = None if budget is None else time.perf_counter() + budget
     best = None
     for name, how, share in runs:
-        left = end - time.perf_counter()
-        if left <= 0:
-            break
-        limit = max(0.01, min(left, share * budget))
+        limit = None  # no budget: the run's own bounds end it (see fewer_robots)
+        if end is not None:
+            left = end - time.perf_counter()
+            if left <= 0:
+                break
+            limit = max(0.01, min(left, share * budget))
         found = _run(instance, how, limit, improve)
         if found is None:
             continue
@@ -214,9 +218,9 @@ def _cut_short(found) -> bool:
     return found is not None and found.stats.get("failure") == "time limit"
 
 
-def _compact_s(budget: float) -> float:
-    """Seconds to compact one schedule found within ``budget``."""
-    return max(0.01, min(0.5, 0.1 * budget))
+def _compact_s(budget: float | None) -> float | None:
+    """Seconds to compact one schedule found within ``budget`` (None: to the fixed point)."""
+    return None if budget is None else max(0.01, min(0.5, 0.1 * budget))
 
 
 def _run(instance: Instance, how, limit: float, improve: bool):

@@ -421,13 +421,14 @@ def test_active_names_robots_of_the_instance():
 
 @pytest.mark.slow
 def test_where_every_robot_blocks_the_others_fewer_robots_finish():
-    # four robots on a crowded random map: the loop with all four deadlocks; three get through
+    # four robots on a crowded random map: the loop with all four deadlocks; three get through.
+    # No time limit anywhere: the runs end at the loop's own bounds, whatever the machine's speed
     from bille.solvers.incumbent import fewer_robots
 
     inst = random_reconfiguration(10, 8, 30, 4, 10, seed=6)
     for transfer in (False, True):
-        assert plan(inst, load_transfer=transfer, time_limit=10).status == "unsolved"
-    found = fewer_robots(inst, 10.0)
+        assert plan(inst, load_transfer=transfer).stats["failure"] == "deadlock"
+    found = fewer_robots(inst, None)
     assert found is not None and "+robots" in found.method
     schedule = Schedule.from_ids(inst, found.ids)
     report = validate(inst, schedule)
