@@ -7,14 +7,17 @@ would, from a fresh clone with bille installed in ``.venv``::
     python tests/doccommands.py OUT [--only README.md --only anytime.md] [--timeout 900]
 
 The README's lines run in the repository (they write into ``docs/``), each page of docs/ in a
-folder of its own under OUT, so that a page never leans on files another page made. Each line
+folder of its own under OUT that links to the repository's files (``tools/bench/movingai/...``),
+so that a page never leans on files another page made. Each line
 runs under ``nice`` with the ``bille`` of the interpreter running this script first on PATH, its
 output in ``OUT/logs``; at its time limit it gets SIGINT, as a terminal's Ctrl-C (exit 130), and
-SIGKILL 30 s later. A table of every line, its exit code and its seconds is printed at the end.
+SIGKILL 30 s later. A table of every line, its exit code, the code its comment expects (``# exit
+1: ...``; 0 where it says none) and its seconds is printed at the end.
 """
 from __future__ import annotations
 
 import argparse
+import itertools
 import os
 import re
 import shlex
@@ -32,24 +35,45 @@ def documents(root: Path = ROOT) -> list[Path]:
 
 
 def lines_of(doc: Path) -> list[str]:
-    """The lines of the document's ```bash blocks, in order: continuation lines joined, blank
-    lines and lines that are only a comment left out."""
+    """The commands of the document's ```bash blocks, in order: continuation lines joined, a
+    here-document kept with its command (``cat > f.yaml <<'EOF'`` ... ``EOF``), blank lines and
+    lines that are only a comment left out."""
     out = []
     for block in re.findall(r"^```bash\n(.*?)^```", doc.read_text(), re.S | re.M):
-        for line in block.replace("\\\n", " ").splitlines():
-            if line.strip() and not line.lstrip().startswith("#"):
-                out.append(line.strip())
+        lines = iter(block.replace("\\\n", " ").splitlines())
+        for line in lines:
+            if not line.strip() or line.lstrip().startswith("#"):
+                continue
+            here = re.search(r"<<-?\s*['\"]?(\w+)['\"]?", line)
+            if here:
+                body = []
+                for more in lines:
+                    body.append(more)
+                    if more.strip() == here.group(1):
+                        break
+                line = "\n".join([line, *body])
+            out.append(line.strip())
     return out
 
 
 def bille_args(line: str) -> list[str] | None:
-    """The arguments after ``bille`` (or ``.venv/bin/bille``, the last command of a ``&&`` chain),
-    or None for a line that runs no bille command."""
-    words = shlex.split(line, comments=True)
-    chain = " ".join(words).split(" && ")[-1].split()
-    if chain and chain[0] in ("bille", ".venv/bin/bille"):
-        return chain[1:]
+    """The arguments after ``bille`` (or ``.venv/bin/bille``) in the last command of a ``&&``
+    chain, up to a redirection or pipe, or None for a line that runs no bille command."""
+    lex = shlex.shlex(line.split("\n")[0], posix=True, punctuation_chars=True)
+    lex.whitespace_split = True
+    words = list(lex)
+    while "&&" in words:
+        words = words[words.index("&&") + 1:]
+    command = list(itertools.takewhile(lambda w: not set(w) <= set("|&;<>"), words))
+    if command and command[0] in ("bille", ".venv/bin/bille"):
+        return command[1:]
     return None
+
+
+def expected_exit(line: str) -> int:
+    """The exit code a line's comment announces (``bille check ... # exit 1: ...``), else 0."""
+    found = re.search(r"#.*\bexit (\d+)", line.split("\n")[0])
+    return int(found.group(1)) if found else 0
 
 
 def run(out: Path, only: list[str], timeout: float) -> list[tuple[str, str, int, float]]:
@@ -61,8 +85,7 @@ def run(out: Path, only: list[str], timeout: float) -> list[tuple[str, str, int,
     for doc in documents():
         if only and doc.name not in only:
             continue
-        cwd = ROOT if doc.name == "README.md" else out / doc.stem
-        cwd.mkdir(parents=True, exist_ok=True)
+        cwd = ROOT if doc.name == "README.md" else _folder(out / doc.stem)
         for k, line in enumerate(lines_of(doc), 1):
             if doc.name == "README.md" and k <= 2:  # the install and the test suite: run by hand
                 continue
@@ -78,8 +101,17 @@ def run(out: Path, only: list[str], timeout: float) -> list[tuple[str, str, int,
                 code = subprocess.call(command, cwd=cwd, env=env, stdin=subprocess.DEVNULL, stdout=stdout,
                                        stderr=stderr)
             rows.append((doc.name, line, code, time.monotonic() - start))
-            print(f"{doc.name}\t{code}\t{rows[-1][3]:.1f}\t{line}", flush=True)
+            print(f"{doc.name}\t{code}\t{expected_exit(line)}\t{rows[-1][3]:.1f}\t{line}", flush=True)
     return rows
+
+
+def _folder(path: Path) -> Path:
+    """An empty working folder for one page, with links to the repository's top-level files."""
+    path.mkdir(parents=True, exist_ok=True)
+    for entry in ROOT.iterdir():
+        if not entry.name.startswith(".") and not (path / entry.name).exists():
+            (path / entry.name).symlink_to(entry)
+    return path
 
 
 def main() -> None:
@@ -89,9 +121,9 @@ def main() -> None:
     parser.add_argument("--timeout", type=float, default=900.0, help="seconds per line before Ctrl-C")
     args = parser.parse_args()
     rows = run(args.out.resolve(), args.only, args.timeout)
-    print("\n| document | command | exit | seconds |\n|---|---|---|---|")
+    print("\n| document | command | exit | expected | seconds |\n|---|---|---|---|---|")
     for doc, line, code, seconds in rows:
-        print(f"| {doc} | `{line.split('  #')[0].strip()}` | {code} | {seconds:.1f} |")
+        print(f"| {doc} | `{line.split('  #')[0].strip()}` | {code} | {expected_exit(line)} | {seconds:.1f} |")
 
 
 if __name__ == "__main__":

@@ -4,7 +4,7 @@ from pathlib import Path
 
 import click
 import pytest
-from doccommands import bille_args, documents, lines_of
+from doccommands import bille_args, documents, expected_exit, lines_of
 
 from bille.instances import load_moveset
 from bille.tools.render import motion_diagram
@@ -107,11 +107,18 @@ def _all_params():
 
 def test_doc_command_lines_are_read_whole(tmp_path):
     doc = tmp_path / "page.md"
-    doc.write_text("text\n```bash\n# a comment\nbille solve lt-4 \\\n  -m cpsat   # why\n\nprintf 'oo' > g\n```\n"
+    doc.write_text("text\n```bash\n# a comment\nbille solve lt-4 \\\n  -m cpsat   # why\n\nprintf 'oo' > g\n"
+                   "cat > s.yaml <<'EOF'\nname: s   # kept\n\nEOF\nbille sweep s.yaml\n```\n"
                    "```\nbille not-a-command\n```\n")
-    assert lines_of(doc) == ["bille solve lt-4    -m cpsat   # why", "printf 'oo' > g"]
+    assert lines_of(doc) == ["bille solve lt-4    -m cpsat   # why", "printf 'oo' > g",
+                             "cat > s.yaml <<'EOF'\nname: s   # kept\n\nEOF", "bille sweep s.yaml"]
     assert bille_args(lines_of(doc)[0]) == ["solve", "lt-4", "-m", "cpsat"]
     assert bille_args("python3.11 -m venv .venv && .venv/bin/bille gap") == ["gap"]
+    assert bille_args("bille solve lt-4 --json > out.json  # stats") == ["solve", "lt-4", "--json"]
+    assert bille_args("bille bench sweep --runs 1000 | tail -1") == ["bench", "sweep", "--runs", "1000"]
+    assert bille_args(lines_of(doc)[2]) is None
+    assert expected_exit("bille check c2 bad.yaml   # exit 1: the first violation") == 1
+    assert expected_exit(lines_of(doc)[0]) == 0
     assert bille_args(lines_of(doc)[1]) is None
     with pytest.raises(click.UsageError):
         _parse(["solve", "lt-4", "--no-such-option"])
