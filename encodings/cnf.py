@@ -15,11 +15,11 @@ import time
 from pysat.card import CardEnc, EncType, ITotalizer
 from pysat.solvers import Solver
 
-from . import SAT, UNKNOWN, UNSAT
-from .backend import SAT_SOLVERS as SOLVERS
 from bille.instances.limits import address_room
 
-from .backend import THREAD_ROOM, Backend, Objective, Outcome, interruptible
+from . import SAT, UNKNOWN, UNSAT
+from .interface import SAT_SOLVERS as SOLVERS
+from .interface import THREAD_ROOM, Backend, Objective, Outcome, interruptible
 from .model import Model
 
 BUDGET = 2_000  # conflicts per call between clock checks
@@ -27,7 +27,7 @@ BUDGET = 2_000  # conflicts per call between clock checks
 
 class SatBackend(Backend):
     """Solve a :class:`~.model.Model` with a SAT solver of python-sat (:data:`SOLVERS`; default
-    CaDiCaL 1.9.5), a :class:`~.backend.Backend`."""
+    CaDiCaL 1.9.5), a :class:`~.interface.Backend`."""
 
     def __init__(self, model: Model, cuts=None, solver: str = "cadical195") -> None:
         super().__init__(model, cuts)

@@ -10,7 +10,7 @@ import time
 from ortools.sat.python import cp_model
 
 from . import SAT, UNKNOWN, UNSAT
-from .backend import Backend, Objective, Outcome, interruptible
+from .interface import Backend, Objective, Outcome, interruptible
 from .model import Model, OutOfTime
 
 
@@ -19,7 +19,7 @@ def _lits(clause) -> list[int]:
 
 
 class CpSatBackend(Backend):
-    """Solve a :class:`~.model.Model` with CP-SAT (:class:`~.backend.Backend`)."""
+    """Solve a :class:`~.model.Model` with CP-SAT (:class:`~.interface.Backend`)."""
 
     def __init__(self, model: Model, cuts=None, threads: int = 1, seed: int = 0, presolve: bool = False,
                  deadline: float | None = None) -> None:
@@ -84,7 +84,7 @@ class CpSatBackend(Backend):
         solver.parameters.num_workers = self.threads
         solver.parameters.random_seed = self.seed
         solver.parameters.cp_model_presolve = self.presolve
-        # Ctrl-C is Python's to hear (:func:`~.backend.interruptible`): CP-SAT's own handler would
+        # Ctrl-C is Python's to hear (:func:`~.interface.interruptible`): CP-SAT's own handler would
         # end the search as if time had run out, and leave no handler behind it in Python
         solver.parameters.catch_sigint_signal = False
         if deadline is not None:

@@ -73,3 +73,19 @@ def test_the_layer_walker_sees_function_level_and_relative_imports():
 def test_modules_stay_small(layer, path):
     lines = len(path.read_text(encoding="utf-8").splitlines())
     assert lines <= MAX_LINES, f"{path.relative_to(ROOT)} has {lines} lines (at most {MAX_LINES}: split it by concept)"
+
+
+def test_no_two_modules_import_each_other():
+    # the rule of `bille bench imports`, over every module rather than those one command loads
+    from bille.tools.bench.importgraph import imports_of
+
+    def name(path: Path) -> str:
+        parts = path.relative_to(ROOT).with_suffix("").parts
+        return ".".join(("bille",) + (parts[:-1] if parts[-1] == "__init__" else parts))
+
+    paths = {name(path): path for _, path in modules()}
+    edges = {(module, target) for module, path in paths.items()
+             for target in imports_of(module, str(path), path.name == "__init__.py")
+             if target in paths and target != module}
+    both = sorted({tuple(sorted(edge)) for edge in edges if edge[::-1] in edges})
+    assert not both, "modules that import each other: " + ", ".join(f"{a} <-> {b}" for a, b in both)
