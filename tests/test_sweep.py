@@ -369,6 +369,15 @@ def test_bad_sweep_files_name_the_file_and_the_entry(tmp_path, text, message):
     assert str(exc.value).startswith(str(tmp_path / "bad.yaml"))
 
 
+def test_a_sweep_file_without_methods_runs_auto_as_bille_solve_does(tmp_path):
+    spec = load_spec(write_spec(tmp_path, "instances: [crowded-2, compare-2]\n", "plain.yaml"))
+    assert [(r.instance, r.method, r.options) for r in spec.runs] == [("crowded-2", "auto", ()),
+                                                                      ("compare-2", "auto", ())]
+    for text in ("instances: [crowded-2]\nmethods: {}\n", "instances: [crowded-2]\nmethods:\n"):
+        with pytest.raises(BilleError, match="methods: expected a mapping"):  # given, but empty
+            load_spec(write_spec(tmp_path, text, "empty.yaml"))
+
+
 def test_the_planner_comparison_as_a_sweep_file_matches_direct_solves(tmp_path):
     from bille.tools.bench.planners import label, run_grid
 

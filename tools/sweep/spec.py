@@ -10,7 +10,7 @@ instances:
   - maps/*.yaml                 # files, globs relative to the sweep file
   - gen: random --moved 3 --robots 2 --seed 0..9   # a generator call, seeds as a range a..b
   - {instance: compare-2, moveset: S5}             # a name or file with another moveset
-methods:
+methods:                        # optional: without it, auto with its defaults (as bille solve)
   temporal-astar: {horizon: [2, 5], epsilon: [1, 2]}   # every combination of the lists
   mstar: {}
   lacam: {improve: 0}           # a single value is a list of one
@@ -140,10 +140,11 @@ def parse_spec(data, path: Path, src=None) -> Spec:
              "results folder is sweep-NAME" + ("" if "name" in data else ": give one with name:"), "name")
     if not isinstance(data.get("instances"), list) or not data["instances"]:
         fail("instances: expected a list of bundled names, files, globs or {gen: ...} calls", "instances")
-    if not isinstance(data.get("methods"), dict) or not data["methods"]:
+    methods = data.get("methods", {"auto": {}})  # the default method, as bille solve's
+    if not isinstance(methods, dict) or not methods:
         fail("methods: expected a mapping of method names to option grids", "methods")
     configs: dict = {}
-    for method, grid in data["methods"].items():
+    for method, grid in methods.items():
         for c in _configs(method, grid, at("methods", method), max_runs - len(configs)):
             if c in configs:
                 fail(f"methods.{method}: the options {dict(c[1])} are listed twice", "methods", method)
