@@ -94,7 +94,7 @@ def test_solves_every_bundled_path_planning_instance(name):
     inst = load_instance(bundled_path(name))
     result = checked(inst, improve=0.0)
     assert result.status in ("feasible", "optimal")
-    assert result.stats["first_s"] < 1.0 or result.stats["nodes"] < 10_000  # a first schedule, quickly
+    assert result.stats["nodes"] < 10_000  # a first schedule, quickly (at most 78 nodes on these)
 
 
 def test_where_the_paper_planner_deadlocks():

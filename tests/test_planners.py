@@ -1,5 +1,4 @@
 """The paper's planners: joint A*, M* and Temporal A* (every schedule goes through the validator)."""
-import time
 
 import pytest
 
@@ -91,9 +90,8 @@ def test_temporal_astar_reports_failure_quickly():
     # crowded-2: whichever robot goes first walks straight at the other, which cannot reach the
     # bay in time; no order of Q helps (joint A* shows a schedule exists)
     inst = load_instance(bundled_path("crowded-2"))
-    start = time.perf_counter()
     result = solve(inst, "temporal-astar", horizon=5)
-    assert time.perf_counter() - start < 5  # generous: it stops after a few milliseconds
+    assert result.stats["expanded"] < 1_000  # it gives up after a few hundred expansions (153)
     assert result.status == "unsolved" and result.schedule is None
     assert result.stats["failure"] == "deadlock"
     assert solve(inst, "astar").status == "optimal"
