@@ -94,15 +94,20 @@ def run(out: Path, only: list[str], timeout: float) -> list[tuple[str, str, int,
                 env[export.group(1)] = export.group(2)
                 rows.append((doc.name, line, 0, 0.0))
                 continue
-            log = logs / f"{doc.stem}-{k:02d}"
-            command = ["timeout", "-s", "INT", "-k", "30", str(timeout), "nice", "bash", "-c", line]
             start = time.monotonic()
-            with open(f"{log}.out", "w") as stdout, open(f"{log}.err", "w") as stderr:
-                code = subprocess.call(command, cwd=cwd, env=env, stdin=subprocess.DEVNULL, stdout=stdout,
-                                       stderr=stderr)
+            code = run_line(line, cwd, env, logs / f"{doc.stem}-{k:02d}", timeout)
             rows.append((doc.name, line, code, time.monotonic() - start))
             print(f"{doc.name}\t{code}\t{expected_exit(line)}\t{rows[-1][3]:.1f}\t{line}", flush=True)
     return rows
+
+
+def run_line(line: str, cwd: Path, env: dict, log: Path, timeout: float) -> int:
+    """Run one line under ``nice`` in ``cwd``, its output in ``log``.out and .err; at ``timeout``
+    seconds its process group gets SIGINT, as from a terminal's Ctrl-C, and SIGKILL 30 s later.
+    Returns the line's own exit code (130 for a command that ended on the Ctrl-C)."""
+    command = ["timeout", "--preserve-status", "-s", "INT", "-k", "30", str(timeout), "nice", "bash", "-c", line]
+    with open(f"{log}.out", "w") as stdout, open(f"{log}.err", "w") as stderr:
+        return subprocess.call(command, cwd=cwd, env=env, stdin=subprocess.DEVNULL, stdout=stdout, stderr=stderr)
 
 
 def _folder(path: Path) -> Path:

@@ -1,10 +1,11 @@
 """The user docs stay true: motion drawings match the shipped movesets, README commands exist."""
+import os
 import re
 from pathlib import Path
 
 import click
 import pytest
-from doccommands import bille_args, documents, expected_exit, lines_of
+from doccommands import bille_args, documents, expected_exit, lines_of, run_line
 
 from bille.instances import load_moveset
 from bille.tools.render import motion_diagram
@@ -92,6 +93,14 @@ def test_docs_commands_parse(doc, line, monkeypatch):
                       internal=("bounds", "progress"))
     if ctx.command.name == "gap":
         parse_configs(params["methods"])
+
+
+def test_doc_line_stopped_at_its_limit_exits_with_its_own_code(tmp_path):
+    """A line that runs past its limit gets Ctrl-C and exits 130, as from a terminal (not the
+    124 of ``timeout``); a line that ends by itself keeps its code."""
+    assert run_line("sleep 20", tmp_path, dict(os.environ), tmp_path / "slow", 0.3) == 130
+    assert run_line("echo hi; exit 3", tmp_path, dict(os.environ), tmp_path / "quick", 20) == 3
+    assert (tmp_path / "quick.out").read_text() == "hi\n"
 
 
 def _all_params():
