@@ -406,3 +406,15 @@ def test_the_load_transfer_experiment_as_a_sweep_file_matches_direct_solves():
             assert row[f"steps_{tag}"] == (direct.metrics.makespan if direct.metrics else None), (inst.name, tag)
             assert row[f"traveled_{tag}"] == (direct.metrics.tiles_traveled if direct.metrics else None)
         assert row["relays"] == direct.stats.get("relays", 0) and row["tasks"] == direct.stats.get("jobs")
+
+
+def test_the_load_transfer_experiment_on_random_instances_certifies_by_cpsat(monkeypatch):
+    """bench load-transfer --random with --exact-limit: the loop's schedules and CP-SAT's optimum
+    on a tiny random instance, one row per size (a local name once hid the call that runs CP-SAT)."""
+    from bille.tools.bench import transfer
+
+    monkeypatch.setattr(transfer, "SIZES", ((1, 1),))
+    lines = list(transfer.random_report(1, 5, 5, 10.0, 20.0, "temporal-astar"))
+    row = lines[-1].replace("|", " ").split()  # moved, robots, solved off, on, mean steps off, on, optimal, gaps, tasks
+    assert row[:4] == ["1", "1", "1/1", "1/1"] and row[6] == "1", lines[-1]
+    assert float(row[7]) >= 0 and float(row[8]) >= 0  # no schedule shorter than the optimum

@@ -173,7 +173,7 @@ def random_report(runs: int, horizon: int, d_tr: int, time_limit: float, exact_l
     for moved, robots in SIZES:
         tiles = 6 * moved  # a structure dense enough for bipeds to turn: 60 tiles on 14x14 for 10 moved
         side = max(14, int(np.ceil(np.sqrt(3.3 * tiles))))
-        solved = {False: [], True: []}
+        steps = {False: [], True: []}  # the makespans of the schedules found, without and with
         gaps = {False: [], True: []}
         optimal = given = 0
         for seed in range(runs):
@@ -190,7 +190,7 @@ def random_report(runs: int, horizon: int, d_tr: int, time_limit: float, exact_l
             for transfer in (False, True):
                 results[transfer] = res = _run(inst, transfer, horizon, d_tr, time_limit, motion)
                 if res.metrics is not None:
-                    solved[transfer].append(res.metrics.makespan)
+                    steps[transfer].append(res.metrics.makespan)
             if exact_limit > 0:
                 exact = solved(solve(inst, "cpsat", time_limit=exact_limit))
                 if exact.status == "optimal":
@@ -203,6 +203,6 @@ def random_report(runs: int, horizon: int, d_tr: int, time_limit: float, exact_l
         def mean(v):
             return f"{np.mean(v):.1f}" if v else "N/A"
 
-        yield (f"{moved:>5} {robots:>6} | {len(solved[False]):>7}/{runs:<2} {len(solved[True]):>2}/{runs:<2}| "
-               f"{mean(solved[False]):>14} {mean(solved[True]):>6} | {optimal:>7} {mean(gaps[False]):>8} "
+        yield (f"{moved:>5} {robots:>6} | {len(steps[False]):>7}/{runs:<2} {len(steps[True]):>2}/{runs:<2}| "
+               f"{mean(steps[False]):>14} {mean(steps[True]):>6} | {optimal:>7} {mean(gaps[False]):>8} "
                f"{mean(gaps[True]):>6} | {given:>5}")
