@@ -111,12 +111,19 @@ def run_line(line: str, cwd: Path, env: dict, log: Path, timeout: float) -> int:
 
 
 def _folder(path: Path) -> Path:
-    """An empty working folder for one page, with links to the repository's top-level files."""
+    """An empty working folder for one page, with links to the repository's own top-level files
+    (those git tracks: not what the README's lines wrote there)."""
     path.mkdir(parents=True, exist_ok=True)
-    for entry in ROOT.iterdir():
-        if not entry.name.startswith(".") and not (path / entry.name).exists():
-            (path / entry.name).symlink_to(entry)
+    for name in tracked_tops(ROOT):
+        if not (path / name).exists():
+            (path / name).symlink_to(ROOT / name)
     return path
+
+
+def tracked_tops(root: Path) -> list[str]:
+    """The top-level names of the files git tracks in ``root``, hidden ones left out."""
+    listed = subprocess.run(["git", "ls-files"], cwd=root, capture_output=True, text=True, check=True).stdout
+    return sorted({line.split("/")[0] for line in listed.splitlines() if not line.startswith(".")})
 
 
 def main() -> None:

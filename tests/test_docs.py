@@ -1,11 +1,12 @@
 """The user docs stay true: motion drawings match the shipped movesets, README commands exist."""
 import os
 import re
+import subprocess
 from pathlib import Path
 
 import click
 import pytest
-from doccommands import bille_args, documents, expected_exit, lines_of, run_line
+from doccommands import bille_args, documents, expected_exit, lines_of, run_line, tracked_tops
 
 from bille.instances import load_moveset
 from bille.tools.render import motion_diagram
@@ -101,6 +102,19 @@ def test_doc_line_stopped_at_its_limit_exits_with_its_own_code(tmp_path):
     assert run_line("sleep 20", tmp_path, dict(os.environ), tmp_path / "slow", 0.3) == 130
     assert run_line("echo hi; exit 3", tmp_path, dict(os.environ), tmp_path / "quick", 20) == 3
     assert (tmp_path / "quick.out").read_text() == "hi\n"
+
+
+def test_doc_pages_see_the_repository_not_what_other_pages_wrote(tmp_path):
+    """A page's folder links what git tracks (the shipped MovingAI maps under tools/), not what
+    the README's lines wrote into the repository (gap.csv, sweep-small/)."""
+    (tmp_path / "tools").mkdir()
+    (tmp_path / "tools" / "room.map").write_text("..")
+    (tmp_path / "README.md").write_text("x")
+    subprocess.run(["git", "init", "-q"], cwd=tmp_path, check=True)
+    subprocess.run(["git", "add", "tools", "README.md"], cwd=tmp_path, check=True)
+    (tmp_path / "gap.csv").write_text("written by a README line")
+    (tmp_path / "sweep-small").mkdir()
+    assert tracked_tops(tmp_path) == ["README.md", "tools"]
 
 
 def _all_params():
