@@ -133,7 +133,7 @@ def expect_mapping(value: Any, src: Source, path: Path_, *, required=(), optiona
     """Check that ``value`` is a mapping with exactly the allowed keys."""
     if not isinstance(value, dict):
         raise src.fail(path, f"expected a mapping, got {_kind(value)}")
-    allowed = tuple(required) + tuple(optional)
+    allowed = tuple(dict.fromkeys((*required, *optional)))  # each once, in order
     for key in value:
         if key not in allowed:
             raise src.fail(path + (key,), f"unknown field (expected one of: {', '.join(allowed)})")

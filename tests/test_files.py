@@ -119,6 +119,15 @@ def assert_one_clear_line(message, path, line, words):
         assert word in message, message
 
 
+def test_unknown_field_lists_each_field_once(tmp_path):
+    path = tmp_path / "bad.yaml"
+    path.write_text(GOOD + "robts: []\n")
+    with pytest.raises(InstanceError) as info:
+        load_instance(path)
+    expected = str(info.value).split("expected one of: ")[1].rstrip(")").split(", ")
+    assert len(expected) == len(set(expected)) and {"grid", "robots", "goal", "tasks"} <= set(expected), expected
+
+
 def test_unreadable_files_name_the_path(tmp_path):
     with pytest.raises(InstanceError, match="no such file"):
         load_instance(tmp_path / "missing.yaml")
