@@ -79,3 +79,39 @@ def test_bench_scale_measures_lacam_against_the_static_bound(capsys):
     assert code == 0 and "lower bound" in out, err
     code, _, err = run(capsys, "bench", "scale", "--obstacles", "60")
     assert code == 2 and "below 50" in err
+
+
+def goals_all_standable(inst) -> bool:
+    """Every robot can stand at its goal cell (front foot) at once: a matching of robots to back
+    feet that are no robot's goal cell, each in a goal pose the robot can walk to."""
+    import networkx as nx
+
+    from bille.instances.walking import UNREACHABLE, walk_for
+
+    tiles = inst.start.tiles
+    walk = walk_for(inst.world.graphs[0], tiles)
+    goal_cells = {inst.start.cell(*g) for g in inst.robot_goals if g is not None}
+    graph = nx.Graph()
+    robots = []
+    for r, (pose, goal) in enumerate(zip(inst.start_state.poses, inst.robot_goals)):
+        if goal is None:
+            continue
+        robots.append(("robot", r))
+        reach = walk.from_pose(pose)
+        for g in walk.goal_poses(inst.start.cell(*goal)).tolist():
+            back = int(walk.graph.feet[g, 1])
+            if reach[g] < UNREACHABLE and back not in goal_cells:
+                graph.add_edge(("robot", r), ("cell", back))
+    if len(graph.nodes) == 0:
+        return not robots
+    matching = nx.bipartite.maximum_matching(graph, top_nodes=[n for n in graph if n[0] == "robot"])
+    return all(r in matching for r in robots)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_bench_scale_goals_leave_room_for_every_robot(seed):
+    from bille.tools.bench.scale import scale_instance
+
+    inst = scale_instance(16, 50, 0.2, seed)  # a robot per four free cells
+    assert sum(g is not None for g in inst.robot_goals) == 50
+    assert goals_all_standable(inst)

@@ -1,6 +1,7 @@
 """Bill-E planners at scale (``bille bench scale``): S7 bipeds on a 64x64 map with 10 % or 20 %
 of its cells obstacles (at random, seeded; the largest 4-connected rest is tiles), each robot
-bound for a random cell it can reach. The complete planner, LaCAM* (``lacam``, first schedule),
+bound for a random cell it can reach, the goals' feet disjoint so that all robots can stand at
+their goals at once. The complete planner, LaCAM* (``lacam``, first schedule),
 against the static lower bound on the makespan (``bille.solvers.bounds``: for robots that only
 walk, the farthest robot's relaxed distance to its goal), beside Temporal A*'s time per
 replanning step (the paper's planner, a few steps of it: it replans every step).
@@ -38,14 +39,21 @@ def scale_instance(size: int, robots: int, obstacles: float, seed: int = 0) -> I
     probe = Instance("probe", ms, grid, tuple(placed))
     walk = walk_for(probe.world.graphs[0], tiles)
     free = np.flatnonzero(tiles).tolist()
+    feet = walk.graph.feet
     goals, taken = [], set()
     for pose in probe.start_state.poses:
         reach = walk.from_pose(pose)
         for _ in range(10_000):
             cell = rnd.choice(free)
-            if cell not in taken and (reach[walk.goal_poses(cell)] < UNREACHABLE).any():
+            if cell in taken:
+                continue
+            # a goal pose whose feet are no other robot's goal cells: every robot can stand at its
+            # goal at once (goal cells alone may surround one, and the instance has no schedule)
+            ends = [g for g in walk.goal_poses(cell).tolist()
+                    if reach[g] < UNREACHABLE and not taken.intersection(feet[g].tolist())]
+            if ends:
                 goals.append(grid.xy(cell))
-                taken.add(cell)
+                taken.update(feet[rnd.choice(ends)].tolist())
                 break
         else:
             goals.append(None)  # boxed in: no goal
