@@ -106,6 +106,9 @@ def plan(instance: Instance, *, epsilon: float = 1.0, horizon: int = 5, time_lim
             if not shift_priorities or stats["priority_shifts"] >= max_shifts:
                 step_times.append(time.perf_counter() - t0)
                 return stop("deadlock")
+            if deadline is not None and time.perf_counter() > deadline:  # many robots: many replans
+                step_times.append(time.perf_counter() - t0)
+                return stop("time limit")
             shift_up(Q, blocked)
             stats["priority_shifts"] += 1
             stats["replans"] += 1
