@@ -107,7 +107,7 @@ def _loop_only(method: str, **options) -> None:
             raise OptionError(f"{method}: {name} is for instances that move tiles (the reconfiguration loop)")
 
 
-CLASSIC = ("auto", "astar", "lacam", "bfs")  # the methods that plan under classic collisions (DESIGN §3)
+CLASSIC = ("auto", "astar", "cbs", "lacam", "bfs")  # the methods that plan under classic collisions (DESIGN §3)
 
 class Registry(MutableMapping):
     """Method name -> planning function, each imported from ``"module:function"`` when it is
@@ -140,6 +140,7 @@ class Registry(MutableMapping):
 METHODS = Registry({
     "auto": "bille.solvers.auto:plan",
     "astar": "bille.heuristics.astar:plan",
+    "cbs": "bille.heuristics.cbs:plan",
     "mstar": f"{__name__}:plan_mstar",
     "temporal-astar": f"{__name__}:plan_temporal_astar",
     "lacam": f"{__name__}:plan_lacam",

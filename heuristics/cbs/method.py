@@ -1,0 +1,139 @@
+"""``cbs``: conflict-based search as a method of ``solve()``: options, proofs, result."""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from bille.instances import Instance, OptionError
+from bille.instances.grid import neighbour_table
+from bille.instances.result import Result
+from bille.instances.schedule import Schedule
+
+from ..joint import NO_WALK, JointProblem, check_tables, require_path_planning
+from .lowlevel import Agent, Budget
+from .search import HEURISTICS, OBJECTIVES, Node, OutOfBudget, Settings, Tree
+
+def agents_of(problem: JointProblem) -> list[Agent]:
+    agents = []
+    for k, (walk, goal) in enumerate(zip(problem.walks, problem.goals)):
+        agents.append(Agent(k, problem.start[k], walk.moves, problem.dist_lists[k], problem.home_lists[k], goal))
+    return agents
+
+
+def closed_world(instance: Instance) -> bool:
+    """Whether walking schedules are all the schedules that matter: no robot carries a tile and
+    no free cell (neither tile nor obstacle) is next to a tile. A tile is set down next to the
+    front foot of a robot, which stands on a tile; by induction the tiles are always a part of
+    the start's (a pick removes one, a place can only fill a cell a pick emptied). Replacing
+    every pick and place by a wait then keeps every rule (the feet still stand on the start's
+    tiles, a wait's collision set is inside the pick's or place's, the start's tiles are
+    connected, the goal's tiles are the start's) and every robot's poses, so the walking optimum
+    is the optimum. Maps converted from MAPF benchmarks are such worlds: every free cell is a
+    tile, or cut off from the tiles by obstacles."""
+    start = instance.start
+    if any(instance.start_state.carrying):
+        return False
+    empty = ~(start.tiles | start.obstacles)
+    nbr = neighbour_table(instance.width, instance.height)
+    tiles = np.append(start.tiles, False)  # index -1 (outside) is no tile
+    return not bool((empty & tiles[nbr].any(axis=1)).any())
+
+
+def plan(instance: Instance, *, objective: str = "sum-of-costs", w: float = 1.0, heuristic: str = "wdg",
+         prioritize: bool = True, bypass: bool = True, target: bool = True, time_limit: float | None = 60.0,
+         max_nodes: int = 1_000_000) -> Result:
+    """Conflict-based search on a path-planning instance (module docstring).
+
+    Parameters
+    ----------
+    objective : ``sum-of-costs`` (each robot's arrival at its goal for good, added up; ties
+        not broken) or ``makespan`` (the latest arrival).
+    w : suboptimality (>= 1): the sum of costs found is at most ``w`` times optimal; 1 is optimal.
+    heuristic : ``wdg``, ``cg`` or ``none`` (sum of costs only).
+    prioritize, bypass, target : the improvements of the module docstring.
+    time_limit : seconds; max_nodes : constraint-tree nodes expanded before giving up.
+
+    On a map whose free cells are all tiles (no robot carrying) walking schedules are all the
+    schedules there are (:func:`closed_world`), so the optimum is over every schedule and a robot
+    that cannot walk to its goal proves the instance infeasible; elsewhere the proofs are over
+    walking-only schedules, as joint A*'s.
+    """
+    if objective not in OBJECTIVES:
+        raise OptionError(f"cbs: unknown objective '{objective}' (expected one of: {', '.join(OBJECTIVES)})")
+    if heuristic not in HEURISTICS:
+        raise OptionError(f"cbs: unknown heuristic '{heuristic}' (expected one of: {', '.join(HEURISTICS)})")
+    if not w >= 1:
+        raise OptionError(f"cbs: option w expects a number of at least 1, got {w}")
+    if w > 1 and objective != "sum-of-costs":
+        raise OptionError("cbs: w > 1 bounds the sum of costs; use it with objective=sum-of-costs")
+    require_path_planning(instance, "cbs")
+    check_tables(instance, "cbs")
+    began = time.perf_counter()
+    deadline = None if time_limit is None else began + time_limit
+    problem = JointProblem.of(instance, "cbs")
+    agents = agents_of(problem)
+    closed = closed_world(instance)
+    restriction = "" if closed else ", walking only (no pick or place)"
+    stats: dict = {"objective": objective.replace("-", " ") + restriction, "w": w, "heuristic": heuristic,
+                   "expanded": 0, "generated": 0, "low_expanded": 0}
+
+    def poll() -> bool:
+        return deadline is not None and time.perf_counter() > deadline
+
+    settings = Settings(objective, heuristic, prioritize, bypass, target, w, max_nodes)
+    tree = Tree(agents, instance.collisions == "classic", settings, poll, stats)
+    try:
+        unreachable = problem.unreachable()
+        if unreachable:
+            stats["unreachable"] = unreachable
+            return _no_schedule(instance, closed, stats, f"robots {unreachable} cannot walk to their goals")
+        root = tree.root()
+        if root is None:
+            return _no_schedule(instance, closed, stats, "a robot cannot walk to its goal")
+        stats["root_cost"] = root.g
+        found = tree.run(root)
+    except (OutOfBudget, Budget):
+        stats["lower_bound_" + objective.replace("-", "_")] = tree.lower
+        over = tree.poll is not None and poll()
+        stats["failure"] = "time limit" if over else f"node limit ({max_nodes} expanded)"
+        return Result("cbs", "timeout" if over else "unsolved", stats=stats)
+    except KeyboardInterrupt:
+        stats["lower_bound_" + objective.replace("-", "_")] = tree.lower
+        return Result("cbs", "interrupted", stats=stats)
+    if found is None:
+        return _no_schedule(instance, closed, stats, "no schedule keeps every constraint")
+    return _result(instance, agents, found, tree, closed, stats)
+
+
+def _no_schedule(instance: Instance, closed: bool, stats: dict, why: str) -> Result:
+    if closed:
+        stats["why"] = why
+        return Result("cbs", "infeasible", stats=stats)
+    stats["failure"] = NO_WALK
+    stats["why"] = why
+    return Result("cbs", "unsolved", stats=stats)
+
+
+def _result(instance: Instance, agents: list[Agent], node: Node, tree: Tree, closed: bool, stats: dict) -> Result:
+    length = max((p.cost for p in node.paths), default=0)
+    ids = np.zeros((len(agents), length), dtype=np.int64)
+    for k, path in enumerate(node.paths):
+        wait = instance.movesets[k].wait
+        row = list(path.actions[1:]) + [wait] * (length - path.cost)
+        ids[k, :] = row
+    schedule = Schedule.from_ids(instance, ids, meta={"method": "cbs"})
+    soc = sum(p.cost for a, p in zip(agents, node.paths) if a.goal >= 0)
+    stats["sum_of_costs"] = soc
+    key = "lower_bound_" + tree.settings.objective.replace("-", "_")
+    stats[key] = min(tree.lower, node.g) if tree.settings.w > 1 else node.g
+    optimal = tree.settings.w == 1
+    lower = None
+    if tree.settings.objective == "makespan" and optimal:
+        if closed:
+            stats.pop("objective")  # the makespan over every schedule: the result's lower bound
+            lower = node.g
+        else:
+            stats["restricted_lower_bound"] = node.g
+    return Result("cbs", "optimal" if optimal else "feasible", schedule, lower_bound=lower, stats=stats)
+

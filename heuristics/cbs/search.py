@@ -1,0 +1,320 @@
+"""The constraint tree: best-first over sets of constraints, each node one path per robot.
+
+A node's cost ``g`` is the sum (or the largest) of its robots' least costs under its constraints;
+it is a lower bound on every schedule in its subtree, since each of those keeps the node's
+constraints. ``f = g + h`` adds an admissible estimate of the extra sum of costs (:mod:`.cover`
+over the node's conflicts: ``cg`` counts cardinal conflicts, ``wdg`` weighs each conflicting pair
+by solving it alone), and a child's ``f`` is at least its parent's. Expanding the node of least
+``f`` that has no conflict gives an optimal schedule; the least ``f`` of the open nodes is at all
+times a proved lower bound on the optimum.
+
+Improvements (each can be switched off, for measurements):
+
+- *prioritizing conflicts*: a cardinal conflict (both branches raise a cost, told by MDDs) is split
+  first, then semi-cardinal, then the rest, the earliest first;
+- *bypassing*: a child of a non-cardinal conflict with its parent's cost and fewer conflicts
+  replaces the parent's paths instead of branching;
+- *target reasoning*: a robot that passes over another's goal after that one arrived is split on
+  the arrival time (:mod:`.conflicts`);
+- *focal search* with ``w > 1``: among the open nodes of ``g <= w * LB`` (``LB`` the least ``f``),
+  the one with the fewest conflicts; the schedule's sum of costs is at most ``w`` times optimal,
+  and ``LB`` is reported.
+
+Under the makespan objective ``g`` is the largest cost and no estimate is added.
+"""
+from __future__ import annotations
+
+import heapq
+import itertools
+from dataclasses import dataclass, field
+
+from .conflicts import KIND_NAMES, TARGET, branches, first_conflict, forced
+from .constraints import Table
+from .cover import cover
+from .lowlevel import MDD, Agent, Avoid, Path, mdd, search
+
+OBJECTIVES = ("sum-of-costs", "makespan")
+HEURISTICS = ("wdg", "cg", "none")
+PAIR_NODES = 64  # constraint-tree nodes for solving one pair of robots alone (WDG)
+
+
+class OutOfBudget(Exception):
+    """The run's time or node budget ran out."""
+
+
+@dataclass(eq=False)
+class Node:
+    constraints: tuple[tuple, ...]  # per robot
+    paths: list[Path]
+    costs: list[int]
+    conflicts: dict[tuple[int, int], tuple]
+    g: int
+    h: int = 0
+    depth: int = 0
+    estimated: bool = False  # h computed for this node's own conflicts
+    closed: bool = False
+    kinds: dict = field(default_factory=dict)  # conflict -> 2 cardinal, 1 semi-cardinal, 0 non
+
+    @property
+    def f(self) -> int:
+        return self.g + self.h
+
+
+@dataclass
+class Settings:
+    objective: str = "sum-of-costs"
+    heuristic: str = "wdg"
+    prioritize: bool = True
+    bypass: bool = True
+    target: bool = True
+    w: float = 1.0
+    max_nodes: int = 1_000_000
+
+
+class Tree:
+    """One constraint-tree search over ``agents`` (all robots, or a pair for WDG)."""
+
+    def __init__(self, agents: list[Agent], classic: bool, settings: Settings, poll, stats: dict) -> None:
+        self.agents, self.classic, self.settings = agents, classic, settings
+        self.poll, self.stats = poll, stats
+        self.soc = settings.objective == "sum-of-costs"
+        self._tables: dict[tuple, Table] = {}
+        self._mdds: dict[tuple, MDD] = {}
+        self._pairs: dict[tuple, int | None] = {}
+        self.counter = itertools.count()
+        self.lower = 0
+
+    # ---- paths ------------------------------------------------------------------------------
+
+    def table(self, constraints: tuple) -> Table:
+        found = self._tables.get(constraints)
+        if found is None:
+            if len(self._tables) > 200_000:
+                self._tables.clear()
+            found = self._tables[constraints] = Table(constraints)
+        return found
+
+    def cost(self, k: int, path: Path) -> int:
+        if self.agents[k].goal < 0 and self.soc:
+            return 0
+        return path.cost
+
+    def replan(self, k: int, constraints: tuple, paths: list[Path | None]) -> Path | None:
+        avoid = Avoid(paths, k, self.classic, [a.stand for a in self.agents])
+        return search(self.agents[k], self.table(constraints), avoid, self.classic, poll=self.poll, stats=self.stats)
+
+    def mdd(self, k: int, node: Node) -> MDD | None:
+        if self.agents[k].goal < 0:
+            return None
+        key = (k, node.constraints[k], node.paths[k].cost)
+        found = self._mdds.get(key)
+        if found is None:
+            if len(self._mdds) > 20_000:
+                self._mdds.clear()
+            found = self._mdds[key] = mdd(self.agents[k], self.table(node.constraints[k]), self.classic,
+                                          node.paths[k].cost)
+        return found
+
+    # ---- nodes ------------------------------------------------------------------------------
+
+    def root(self, constraints: tuple[tuple, ...] | None = None, paths: list[Path] | None = None) -> Node | None:
+        m = len(self.agents)
+        constraints = constraints or ((),) * m
+        if paths is None:
+            paths = [None] * m
+            for k in range(m):
+                paths[k] = self.replan(k, constraints[k], paths)
+                if paths[k] is None:
+                    return None
+        conflicts = {}
+        for i in range(m):
+            for j in range(i + 1, m):
+                c = first_conflict(self.agents, i, paths[i], j, paths[j], self.classic)
+                if c is not None:
+                    conflicts[(i, j)] = c
+        costs = [self.cost(k, p) for k, p in enumerate(paths)]
+        return Node(constraints, list(paths), costs, conflicts, self.total(costs))
+
+    def total(self, costs: list[int]) -> int:
+        return sum(costs) if self.soc else max(costs, default=0)
+
+    def child(self, node: Node, k: int, constraint: tuple) -> Node | None:
+        constraints = node.constraints[:k] + (node.constraints[k] + (constraint,),) + node.constraints[k + 1:]
+        path = self.replan(k, constraints[k], node.paths)
+        if path is None:
+            return None
+        paths = list(node.paths)
+        paths[k] = path
+        costs = list(node.costs)
+        costs[k] = self.cost(k, path)
+        conflicts = {pair: c for pair, c in node.conflicts.items() if k not in pair}
+        for other in range(len(self.agents)):
+            if other != k:
+                i, j = min(k, other), max(k, other)
+                c = first_conflict(self.agents, i, paths[i], j, paths[j], self.classic)
+                if c is not None:
+                    conflicts[(i, j)] = c
+        g = self.total(costs)
+        child = Node(constraints, paths, costs, conflicts, g, depth=node.depth + 1)
+        child.h = max(0, node.f - g)  # the subtree is part of the parent's
+        self.stats["generated"] = self.stats.get("generated", 0) + 1
+        return child
+
+    # ---- conflicts and the estimate ----------------------------------------------------------
+
+    def classify(self, node: Node) -> None:
+        """Cardinal (2), semi-cardinal (1) or not (0), for each conflict of the node."""
+        for c in node.conflicts.values():
+            if c in node.kinds:
+                continue
+            if not (self.settings.prioritize or self.settings.heuristic != "none"):
+                node.kinds[c] = 0
+                continue
+            _, i, j, _, _ = c
+            node.kinds[c] = sum(forced(self.agents[k], self.mdd(k, node), c, side, self.classic)
+                                for side, k in enumerate((i, j)))
+
+    def estimate(self, node: Node) -> int | None:
+        """An admissible estimate of the node's extra cost (module docstring); None when a pair
+        of its robots has no schedule under the node's constraints (the subtree is empty)."""
+        if not self.soc or self.settings.heuristic == "none":
+            return 0
+        edges = {}
+        for pair, c in node.conflicts.items():
+            if node.kinds.get(c) == 2:
+                edges[pair] = 1
+            if self.settings.heuristic == "wdg":
+                w = self.pair_weight(node, *pair, floor=edges.get(pair, 0))
+                if w is None:
+                    return None
+                if w > 0:
+                    edges[pair] = w
+        return cover(edges)
+
+    def pair_weight(self, node: Node, i: int, j: int, floor: int) -> int | None:
+        """What robots ``i`` and ``j`` alone must pay above their costs under the node's
+        constraints (at least ``floor``): the least f a small search over the two proves."""
+        key = (i, j, node.constraints[i], node.constraints[j])
+        if key in self._pairs:
+            found = self._pairs[key]
+            return None if found is None else max(found, floor)
+        pair = Tree([self.agents[i], self.agents[j]], self.classic,
+                    Settings(heuristic="cg", max_nodes=PAIR_NODES), self.poll, {})
+        start = pair.root((node.constraints[i], node.constraints[j]), [node.paths[i], node.paths[j]])
+        found = pair.best(start)
+        base = node.costs[i] + node.costs[j]
+        weight = None if found is None else max(0, found - base)
+        self._pairs[key] = weight
+        self.stats["pairs"] = self.stats.get("pairs", 0) + 1
+        return None if weight is None else max(weight, floor)
+
+    def choose(self, node: Node):
+        """The conflict to split: cardinal first, then semi-cardinal; targets first among equals;
+        the earliest."""
+        return min(node.conflicts.values(),
+                   key=lambda c: (-node.kinds.get(c, 0), c[0] != TARGET, c[3], c[1], c[2]))
+
+    # ---- the search --------------------------------------------------------------------------
+
+    def best(self, root: Node | None) -> int | None:
+        """The optimal cost for a pair (WDG): the cost of a conflict-free node, or the least f
+        proved when the node budget runs out; None if the pair has no schedule."""
+        try:
+            found = self.run(root)
+        except OutOfBudget:
+            return self.lower
+        return None if found is None else found.g
+
+    def run(self, root: Node | None) -> Node | None:
+        """The optimal (focal: bounded-suboptimal) conflict-free node, or None if there is none.
+        Raises :class:`OutOfBudget` (``self.lower`` then holds the bound proved)."""
+        if root is None:
+            return None
+        settings = self.settings
+        focal_mode = settings.w > 1
+        by_f: list = []  # (f, conflicts, -depth, n, node)
+        focal: list = []  # (conflicts, f, n, node): nodes with g <= w * LB
+        pending: list = []  # (g, n, node): open nodes not yet in focal
+        expanded = 0
+
+        def push(n: Node) -> None:
+            count = next(self.counter)
+            heapq.heappush(by_f, (n.f, len(n.conflicts), -n.depth, count, n))
+            if focal_mode:
+                heapq.heappush(pending, (n.g, count, n))
+
+        def least_f() -> int | None:
+            while by_f and (by_f[0][4].closed or by_f[0][0] != by_f[0][4].f):
+                heapq.heappop(by_f)
+            return by_f[0][0] if by_f else None
+
+        push(root)
+        while True:
+            low = least_f()
+            if low is None:
+                return None
+            self.lower = max(self.lower, low)
+            if focal_mode:
+                limit = settings.w * self.lower
+                while pending and pending[0][0] <= limit:
+                    _, count, n = heapq.heappop(pending)
+                    if not n.closed:
+                        heapq.heappush(focal, (len(n.conflicts), n.f, count, n))
+                while focal and focal[0][3].closed:
+                    heapq.heappop(focal)
+                node = focal[0][3] if focal else by_f[0][4]
+                if focal:
+                    heapq.heappop(focal)
+            else:
+                node = heapq.heappop(by_f)[4]
+            if self.poll is not None and self.poll():
+                raise OutOfBudget
+            if not node.conflicts:
+                node.closed = True
+                return node
+            if not node.estimated:
+                self.classify(node)
+                h = self.estimate(node)
+                node.estimated = True
+                if h is None:
+                    node.closed = True
+                    continue
+                if node.g + h > node.f:
+                    node.h = h
+                    push(node)
+                    continue
+            node.closed = True
+            expanded += 1
+            self.stats["expanded"] = self.stats.get("expanded", 0) + 1
+            if expanded > settings.max_nodes:
+                raise OutOfBudget
+            self.expand(node, push)
+
+    def expand(self, node: Node, push) -> None:
+        conflict = self.choose(node)
+        kind = node.kinds.get(conflict, 0)
+        self.stats.setdefault("split", {}).setdefault(KIND_NAMES[conflict[0]], 0)
+        self.stats["split"][KIND_NAMES[conflict[0]]] += 1
+        children = []
+        for k, constraint in branches(conflict) if self.settings.target or conflict[0] != TARGET \
+                else _plain(conflict, self.classic):
+            child = self.child(node, k, constraint)
+            if child is None:
+                continue
+            if self.settings.bypass and kind < 2 and child.g == node.g and len(child.conflicts) < len(node.conflicts):
+                self.stats["bypassed"] = self.stats.get("bypassed", 0) + 1
+                adopted = Node(node.constraints, child.paths, child.costs, child.conflicts, node.g, node.h,
+                               node.depth)
+                push(adopted)
+                return
+            children.append(child)
+        for child in children:
+            push(child)
+
+
+def _plain(conflict, classic: bool):
+    """A target conflict split as an ordinary one (target reasoning off)."""
+    from .conflicts import CELLS, VERTEXC
+
+    kind, i, j, t, where = conflict
+    return branches((VERTEXC if classic else CELLS, i, j, t, where))
