@@ -69,3 +69,27 @@ def test_the_command_line_says_what_auto_chose(cli, capsys):
     assert cli(["solve", "crowded-2"]) == 0
     out = capsys.readouterr().out.splitlines()
     assert out[0].startswith("auto: optimal in ") and out[1].startswith("auto chose bfs: about ")
+
+
+def test_classic_mapf_goes_to_conflict_based_search(monkeypatch):
+    # libMultiRobotPlanning's mapf_swap2: two robots swap ends of a row with a bay above
+    from helpers import make
+
+    inst = make("T.T.\nTTTT\nT..T", [{"at": [0, 1]}, {"at": [3, 1]}], moveset="point", collisions="classic",
+                robot_goals=[[3, 1], [0, 1]])
+    monkeypatch.setattr("bille.solvers.bfs.plan", lambda *a, **k: (_ for _ in ()).throw(AssertionError("bfs ran")))
+    result = solve(inst, time_limit=20)
+    assert result.stats["auto"]["method"] == "cbs" and result.status == "optimal"
+    assert validate(inst, result.schedule).valid and result.stats["sum_of_costs"] == 8
+
+
+def test_classic_mapf_hands_over_to_lacam_when_cbs_runs_out(monkeypatch):
+    from helpers import make
+
+    inst = make("T.T.\nTTTT\nT..T", [{"at": [0, 1]}, {"at": [3, 1]}], moveset="point", collisions="classic",
+                robot_goals=[[3, 1], [0, 1]])
+    monkeypatch.setitem(__import__("bille.solvers.registry", fromlist=["METHODS"]).METHODS, "cbs",
+                        lambda instance, time_limit: Result("cbs", "timeout", stats={"lower_bound_sum_of_costs": 7}))
+    result = solve(inst, time_limit=20)
+    assert result.stats["auto"]["method"] == "lacam" and result.stats["lower_bound_sum_of_costs"] == 7
+    assert result.schedule is not None and validate(inst, result.schedule).valid

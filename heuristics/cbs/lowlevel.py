@@ -54,10 +54,7 @@ class Path:
     poses: tuple[int, ...]
     actions: tuple[int, ...]
     cells: tuple[frozenset, ...]
-
-    @property
-    def cost(self) -> int:
-        return len(self.poses) - 1
+    cost: int
 
 
 class Avoid:
@@ -86,14 +83,14 @@ class Avoid:
                     row[c] = row.get(c, 0) + 1
 
     def count(self, p: int, q: int, cells: frozenset, t: int) -> int:
-        row = self.steps[min(t, self.last + 1)]
+        last = self.last
+        row = self.steps[t if t <= last else last + 1]
         if not row:
             return 0
         if self.classic:
-            n = row.get(q, 0)
-            if t <= self.last and (q, p) in self.moves[t]:
-                n += 1
-            return n
+            if t <= last and (q, p) in self.moves[t]:
+                return row.get(q, 0) + 1
+            return row.get(q, 0)
         return sum(row.get(c, 0) for c in cells)
 
 
@@ -130,32 +127,41 @@ def search(agent: Agent, table: Table, avoid: Avoid | None, classic: bool, *,
         return None
     min_arrival = table.min_arrival
     cap = max(table.last, 0 if avoid is None else avoid.last) + 1
+    banned_at, edges_at, ranges, range_cells = table.at.get, table.edges.get, table.ranges, table.range_cells
+    count = None if avoid is None else avoid.count
     counter = 0
-    f0 = max(dist[start], min_arrival)
-    frontier = [(f0, 0, 0, counter, start, 0)]
+    frontier = [(max(dist[start], min_arrival), 0, 0, counter, start, 0)]
     best = {(start, 0): 0}
     parent: dict[tuple[int, int], tuple[int, int, frozenset]] = {}
     expanded = 0
+    found = None
     while frontier:
         f, k, _, _, p, t = heapq.heappop(frontier)
-        key = (p, t if t < cap else cap)
-        if best.get(key, NEVER) < k:
+        if best.get((p, t if t < cap else cap), NEVER) < k:
             continue
         if f > cost_cap:
             break
         if home[p] and t >= min_arrival and t >= table.stay_from(p, agent.stand(p)):
-            if stats is not None:
-                stats["low_expanded"] = stats.get("low_expanded", 0) + expanded
-            return _unwind(parent, p, t)
+            found = _unwind(parent, p, t)
+            break
         expanded += 1
         if poll is not None and expanded % 1024 == 0 and poll():
             raise Budget
         t1 = t + 1
+        banned, edges = banned_at(t1), edges_at(t1)
         for a, q, cells in moves(p):
             d = dist[q]
-            if d >= UNREACHABLE or not allowed(table, classic, p, q, cells, t1):
+            if d >= UNREACHABLE:
                 continue
-            k1 = k if avoid is None else k + avoid.count(p, q, cells, t1)
+            if classic:
+                if (banned is not None and q in banned) or (edges is not None and (p, q) in edges) \
+                        or (q in ranges and t1 >= ranges[q]):
+                    continue
+            elif (banned is not None and not banned.isdisjoint(cells)) or \
+                    (range_cells and not range_cells.isdisjoint(cells) and
+                     any(t1 >= ranges[c] for c in cells if c in ranges)):
+                continue
+            k1 = k if count is None else k + count(p, q, cells, t1)
             key1 = (q, t1 if t1 < cap else cap)
             if k1 < best.get(key1, NEVER):
                 best[key1] = k1
@@ -165,7 +171,7 @@ def search(agent: Agent, table: Table, avoid: Avoid | None, classic: bool, *,
                 heapq.heappush(frontier, (f1 if f1 > min_arrival else min_arrival, k1, -t1, counter, q, t1))
     if stats is not None:
         stats["low_expanded"] = stats.get("low_expanded", 0) + expanded
-    return None
+    return found
 
 
 def _unwind(parent: dict, pose: int, t: int) -> Path:
@@ -176,7 +182,7 @@ def _unwind(parent: dict, pose: int, t: int) -> Path:
         actions.append(a)
         cells.append(c)
         pose, t = p, t - 1
-    return Path(tuple(poses[::-1]), (-1, *actions[::-1]), (frozenset(), *cells[::-1]))
+    return Path(tuple(poses[::-1]), (-1, *actions[::-1]), (frozenset(), *cells[::-1]), len(poses) - 1)
 
 
 @dataclass(frozen=True, eq=False)

@@ -179,11 +179,12 @@ class Tree:
         of its robots has no schedule under the node's constraints (the subtree is empty)."""
         if not self.soc or self.settings.heuristic == "none":
             return 0
+        wdg = self.settings.heuristic == "wdg" and len(self.agents) > 2  # with two robots, the pair is the problem
         edges = {}
         for pair, c in node.conflicts.items():
             if node.kinds.get(c) == 2:
                 edges[pair] = 1
-            if self.settings.heuristic == "wdg":
+            if wdg:
                 w = self.pair_weight(node, *pair, floor=edges.get(pair, 0))
                 if w is None:
                     return None

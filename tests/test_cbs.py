@@ -1,0 +1,161 @@
+"""Conflict-based search: optima against the brute force, under both collision rules, with every
+improvement on and off; every schedule through the validator."""
+from random import Random
+
+import pytest
+
+from bille.instances import InstanceError, OptionError, instance_from_text, load_instance
+from bille.instances.bundled import bundled_path
+from bille.solvers import solve, validate
+from helpers import make
+from refsearch import optimal_soc, walking_makespan
+
+SETTINGS = [{}, {"heuristic": "cg"}, {"heuristic": "none", "prioritize": False, "bypass": False, "target": False}]
+BUDGET = {"max_nodes": 3000, "time_limit": None}  # a budget in nodes, not seconds
+
+
+def path_planning(seed: int):
+    """A random tiny path-planning instance: point robots under either rule, or S5/S7 Bill-Es;
+    some cells missing or obstacles, some robots without a goal. None where the draw is invalid."""
+    rnd = Random(seed)
+    kind = rnd.choice(["point", "classic", "S5", "S7"])
+    W, H = rnd.randint(3, 5), rnd.randint(2, 4)
+    cells = [(x, y) for y in range(H) for x in range(W)]
+    tiles = set(cells) - {rnd.choice(cells) for _ in range(rnd.randint(0, 3))}
+    grid = "\n".join("  " + "".join("T" if (x, y) in tiles else rnd.choice(".#") for x in range(W)) for y in range(H))
+    robots, goals, used = [], [], set()
+    for _ in range(rnd.randint(1, 3 if kind in ("S5", "S7") else 4)):
+        f = rnd.choice(sorted(tiles))
+        if kind in ("point", "classic"):
+            if f in used:
+                continue
+            used.add(f)
+            robots.append(f"{{at: [{f[0]}, {f[1]}]}}")
+        else:
+            dx, dy = rnd.choice([(0, 1), (1, 0), (0, -1), (-1, 0)])
+            b = (f[0] + dx, f[1] + dy)
+            if b not in tiles or {f, b} & used:
+                continue
+            used |= {f, b}
+            robots.append(f"{{front: [{f[0]}, {f[1]}], back: [{b[0]}, {b[1]}]}}")
+        g = rnd.choice(sorted(tiles))
+        goals.append("null" if rnd.random() < 0.15 else f"[{g[0]}, {g[1]}]")
+    if not robots:
+        return None
+    text = (f"name: pp{seed}\nmoveset: {'point' if kind == 'classic' else kind}\n"
+            + ("collisions: classic\n" if kind == "classic" else "")
+            + f"grid: |\n{grid}\nrobots: [{', '.join(robots)}]\nrobot_goals: [{', '.join(goals)}]\n")
+    try:
+        return instance_from_text(text)
+    except InstanceError:
+        return None
+
+
+TINY = [inst for inst in map(path_planning, range(60)) if inst is not None]
+
+
+def test_the_tiny_set_has_both_rules_and_both_footprints():
+    assert len(TINY) >= 30
+    assert {i.collisions for i in TINY} == {"bille", "classic"}
+    assert {i.movesets[0].footprint for i in TINY} == {"point", "biped"}
+
+
+@pytest.mark.parametrize("inst", TINY, ids=lambda i: i.name)
+def test_sum_of_costs_matches_the_brute_force(inst):
+    expected = optimal_soc(inst)
+    for settings in SETTINGS:
+        result = solve(inst, "cbs", **settings, **BUDGET)
+        if expected is None:  # no walking schedule: never a schedule, a proof only in a closed world
+            assert result.status in ("infeasible", "unsolved"), settings
+            continue
+        assert result.status == "optimal", (settings, result.stats)
+        assert validate(inst, result.schedule).valid
+        assert result.stats["sum_of_costs"] == expected[0], settings
+
+
+@pytest.mark.parametrize("inst", TINY[::2], ids=lambda i: i.name)
+def test_makespan_matches_the_brute_force(inst):
+    expected = walking_makespan(inst)
+    result = solve(inst, "cbs", objective="makespan", **BUDGET)
+    if expected is None:
+        assert result.status in ("infeasible", "unsolved")
+        return
+    assert result.status == "optimal" and validate(inst, result.schedule).valid
+    assert result.metrics.makespan == expected
+    proved = result.lower_bound if result.lower_bound is not None else result.stats["restricted_lower_bound"]
+    assert proved == expected
+
+
+@pytest.mark.parametrize("w", [1.5, 2.0])
+def test_focal_search_stays_within_w_and_its_bound_is_below_the_optimum(w):
+    for inst in TINY[:30]:
+        expected = optimal_soc(inst)
+        if expected is None:
+            continue
+        result = solve(inst, "cbs", w=w, **BUDGET)
+        assert result.status == "feasible" and validate(inst, result.schedule).valid
+        assert result.stats["lower_bound_sum_of_costs"] <= expected[0] <= result.stats["sum_of_costs"] <= w * expected[0]
+
+
+SWAP = "TTTTT\n.T.T."  # two bays: robots can pass each other
+
+
+def test_target_reasoning_lets_a_robot_pass_over_an_arrived_one():
+    # robot 0 arrives at (1,0) in one step; robot 1 must pass over it later
+    inst = make(SWAP, [{"at": [0, 0]}, {"at": [4, 0]}], moveset="point", robot_goals=[[1, 0], [0, 0]],
+                collisions="classic")
+    result = solve(inst, "cbs")
+    assert result.status == "optimal" and validate(inst, result.schedule).valid
+    assert result.stats["sum_of_costs"] == optimal_soc(inst)[0]
+    assert result.stats["split"].get("target", 0) >= 1
+
+
+def test_a_closed_world_proves_infeasibility_and_names_no_restriction():
+    # every free cell a tile: a Bill-E in a one-cell-wide corridor cannot turn round to reach
+    # its goal behind it, and no tile can ever be set down to widen it
+    inst = make("TTTT", [{"front": [1, 0], "back": [0, 0]}], moveset="S5", robot_goals=[[0, 0]])
+    result = solve(inst, "cbs")
+    assert result.status == "infeasible"
+    ok = solve(make("TTTT", [{"at": [0, 0]}], moveset="point", robot_goals=[[3, 0]]), "cbs")
+    assert ok.stats["objective"] == "sum of costs"
+
+
+def test_an_open_world_proves_nothing_beyond_walking():
+    # an empty cell beside the tiles: a tile could be moved there, so walking is a restriction
+    inst = make("TTTT\n....", [{"front": [1, 0], "back": [0, 0]}], moveset="S5", robot_goals=[[0, 0]])
+    assert solve(inst, "cbs").status == "unsolved"
+    found = solve(make("TTT.", [{"at": [0, 0]}], moveset="point", robot_goals=[[2, 0]]), "cbs", objective="makespan")
+    assert found.status == "optimal" and found.lower_bound is None
+    assert found.stats["restricted_lower_bound"] == 2 and "walking only" in found.stats["objective"]
+
+
+def test_a_swap_in_a_corridor_ends_at_the_node_budget_without_a_false_proof():
+    inst = make("TTTT", [{"at": [0, 0]}, {"at": [3, 0]}], moveset="point", robot_goals=[[3, 0], [0, 0]],
+                collisions="classic")
+    result = solve(inst, "cbs", max_nodes=50, time_limit=None)
+    assert result.status == "unsolved" and result.schedule is None
+    assert "node limit" in result.stats["failure"]
+
+
+@pytest.mark.parametrize("name", ["compare-2", "compare-3", "compare-4", "crowded-2", "crowded-3"])
+def test_cbs_agrees_with_joint_astar_on_bundled_maps(name):
+    inst = load_instance(bundled_path(name))
+    a, c = solve(inst, "astar", time_limit=120), solve(inst, "cbs", time_limit=120)
+    assert a.status == c.status == "optimal" and validate(inst, c.schedule).valid
+    assert a.stats["sum_of_costs"] == c.stats["sum_of_costs"]
+
+
+@pytest.mark.parametrize("options, message", [
+    ({"objective": "flowtime"}, "unknown objective"),
+    ({"heuristic": "dg2"}, "unknown heuristic"),
+    ({"w": 0.5}, "at least 1"),
+    ({"w": 2.0, "objective": "makespan"}, "sum of costs"),
+])
+def test_bad_options_get_one_clear_error(options, message):
+    with pytest.raises(OptionError, match=message):
+        solve(load_instance(bundled_path("compare-2")), "cbs", **options)
+
+
+def test_cbs_refuses_instances_that_move_tiles():
+    with pytest.raises(OptionError, match="moves tiles"):
+        solve(load_instance(bundled_path("lt-4")), "cbs")
