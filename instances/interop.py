@@ -227,7 +227,9 @@ def schedule_from_mrp(inst: Instance, data: dict, src: Source | str | None = Non
     """A schedule from libMultiRobotPlanning's ``schedule``: one entry per agent of the instance
     (by name), each a list of ``{x, y, t}`` with ``t`` from 0 (the agent's start) strictly
     increasing; unit moves between consecutive entries, waits where a time is skipped and after
-    an agent's last entry."""
+    an agent's last entry. Agents keyed ``agent0``, ``agent1``, ... where the instance names them
+    otherwise are taken by index, as libMultiRobotPlanning's ``cbs`` writes them, and the
+    schedule's ``meta["agents"]`` says so."""
     if not isinstance(src, Source):
         src = Source(src or None, ScheduleError)
     check_portable(inst, "a libMultiRobotPlanning schedule")
@@ -236,6 +238,10 @@ def schedule_from_mrp(inst: Instance, data: dict, src: Source | str | None = Non
     if not isinstance(plans, dict):
         raise src.fail(("schedule",), "expected a mapping of agent names to paths")
     names = agent_names(inst)
+    by_index = [f"agent{i}" for i in range(len(names))]
+    keyed_by_index = names != by_index and set(plans) == set(by_index)
+    if keyed_by_index:  # libMultiRobotPlanning's cbs names agents by their place in the file
+        plans = {names[int(key[5:])]: path for key, path in plans.items()}
     for key in plans:
         if key not in names:
             raise src.fail(("schedule", key), f"agent {key!r} is not an agent of instance '{inst.name}' (its agents: "
@@ -275,7 +281,11 @@ def schedule_from_mrp(inst: Instance, data: dict, src: Source | str | None = Non
             row += ["wait"] * (t1 - t0 - 1) + [move]
             cell = nxt
         rows.append(tuple(row + ["wait"] * (makespan - len(row))))
-    return Schedule(tuple(rows), meta={"source": "libMultiRobotPlanning"})
+    meta = {"source": "libMultiRobotPlanning"}
+    if keyed_by_index:
+        meta["agents"] = (f"keyed by index (agent0 .. agent{len(names) - 1}), read in the instance's order "
+                          f"({', '.join(names[:3])}{' ...' if len(names) > 3 else ''})")
+    return Schedule(tuple(rows), meta=meta)
 
 
 def mrp_name(path: str | Path) -> bool:

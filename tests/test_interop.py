@@ -232,6 +232,17 @@ def test_agent_names_of_the_instance_are_kept(tmp_path, capsys):
     assert list(yaml_load(tmp_path / "q.mrp.yaml")["schedule"]) == ["alice", "bob"]
 
 
+def test_a_schedule_keyed_by_index_is_read_in_the_instance_order_and_says_so(tmp_path, capsys):
+    # libMultiRobotPlanning's cbs writes agent0, agent1, ... whatever the instance calls them
+    (tmp_path / "i.mrp.yaml").write_text(MRP.replace("agent0", "bob").replace("agent1", "alice"))
+    (tmp_path / "p.mrp.yaml").write_text(PLAN)
+    code, out, err = cli(capsys, "convert", tmp_path / "p.mrp.yaml", tmp_path / "p.yaml", "--instance",
+                         tmp_path / "i.mrp.yaml")
+    assert code == 0, err
+    assert "keyed by index" in out and "(bob, alice)" in out
+    assert load_schedule(tmp_path / "p.yaml").actions == (("east",), ("west",))  # bob is agent0
+
+
 def yaml_load(path):
     import yaml
 

@@ -46,6 +46,8 @@ def convert(source: str, target: str, instance_path: str | None, agents: int | N
         inst = _instance(instance_path)
         text = _yaml(schedule_to_mrp(inst, value)) if mrp_name(target) else dump_schedule(value)
         write_atomic(target, text, ScheduleError)
+        if (value.meta or {}).get("agents"):
+            click.echo(f"{source}: agents {value.meta['agents']}")
     click.echo(f"{source} -> {target}")
     return EXIT_OK
 

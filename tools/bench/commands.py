@@ -266,14 +266,22 @@ def bench_crowd(size: int, robots: int, horizon: int, seed: int) -> int:
 @click.option("--peers", type=click.Path(file_okay=False, exists=True), default=None,
               help="Folder with lacam3 (lacam3/build/main) and pypibt (pypibt/pypibt) built from their own "
                    "repositories: print bille's time and sum of costs against theirs.")
+@click.option("--optimal", is_flag=True, help="The exact methods instead: cbs, basic CBS (the baseline) and joint "
+              "A*, optimal sum of costs with proof (default --agents 10,20,30,40).")
 def bench_mapf(folder: str | None, names: str | None, agents: str, time_limit: float, improve: float,
-               peers: str | None) -> int:
-    """Classic MAPF on MovingAI maps: LaCAM*'s success, sum of costs, makespan and time."""
+               peers: str | None, optimal: bool) -> int:
+    """Classic MAPF on MovingAI maps: LaCAM*'s success, sum of costs, makespan and time; with
+    --optimal, the exact methods' proofs and times."""
     from pathlib import Path
 
     from .mapf import MAPS, map_names, mapf_rows, mapf_table, shipped_maps
     from .peers import available, peers_table
 
+    if optimal and peers:
+        raise click.BadParameter("the peers find schedules without proof; bille bench cbs compares the exact "
+                                 "methods with libMultiRobotPlanning's CBS", param_hint="--peers")
+    if optimal and agents == "50,100,200,300,400":
+        agents = "10,20,30,40"
     counts = _counts(agents, "--agents", "agent counts")
     where = shipped_maps() if folder is None else Path(folder)
     found = map_names(where)
@@ -282,6 +290,8 @@ def bench_mapf(folder: str | None, names: str | None, agents: str, time_limit: f
     if missing or not chosen:
         raise click.BadParameter(f"{', '.join(missing) or 'no map'}: expected NAME.map and NAME-random-1.scen in "
                                  f"{where} (found: {', '.join(found) or 'none'})", param_hint="--names")
+    if optimal:
+        return _optimal(where, chosen, counts, time_limit)
     found_peers = available(Path(peers)) if peers else {}
     if peers and not found_peers:
         raise click.BadParameter(f"{peers}: neither lacam3/build/main nor pypibt/pypibt/ in it", param_hint="--peers")
@@ -290,6 +300,47 @@ def bench_mapf(folder: str | None, names: str | None, agents: str, time_limit: f
         rows.append(row)
         click.echo(f"{row['map']} {row['agents']} agents: {row['status']} {row.get('reason', '')}".rstrip(), err=True)
     for line in mapf_table(rows) if not found_peers else peers_table(rows, sorted(found_peers)):
+        click.echo(line)
+    return EXIT_OK
+
+
+def _optimal(where, chosen, counts, time_limit: float) -> int:
+    from .optimal import optimal_rows, optimal_table
+
+    rows = []
+    for row in optimal_rows(where, chosen, counts, time_limit):
+        rows.append(row)
+        told = ", ".join(f"{k} {v['status']}" for k, v in row["runs"].items()) or row.get("reason", "")
+        click.echo(f"{row['map']} {row['agents']} agents: {told}", err=True)
+    for line in optimal_table(rows):
+        click.echo(line)
+    return EXIT_OK
+
+
+@bench.command("cbs")
+@click.argument("instances", nargs=-1, required=True, type=click.Path(exists=True))
+@click.option("--against", "binary", required=True, type=click.Path(exists=True, dir_okay=False),
+              help="libMultiRobotPlanning's cbs program, built from its own repository (never part of bille).")
+@click.option("--time-limit", type=click.FloatRange(min=0.1), default=60.0, show_default=True, help="Seconds per run.")
+def bench_cbs(instances, binary: str, time_limit: float) -> int:
+    """bille's cbs against libMultiRobotPlanning's CBS on its YAML instances (files or folders):
+    sums of costs compared, times side by side, their geometric mean ratio."""
+    from pathlib import Path
+
+    from .optimal import executable, peer_files, peer_rows, peer_table
+
+    if not executable(binary):
+        raise click.BadParameter(f"{binary}: not an executable program", param_hint="--against")
+    files = peer_files(list(instances))
+    if not files:
+        raise click.BadParameter(f"no .yaml file in {', '.join(instances)}", param_hint="INSTANCES")
+    rows = []
+    for k, row in enumerate(peer_rows(Path(binary), files, time_limit), 1):
+        rows.append(row)
+        mine, theirs = row.get("bille", {}), row.get("peer", {})
+        click.echo(f"[{k}/{len(files)}] {row['instance']}: bille {mine.get('soc', mine.get('status'))}, "
+                   f"peer {theirs.get('soc')}", err=True)
+    for line in peer_table(rows):
         click.echo(line)
     return EXIT_OK
 
