@@ -15,6 +15,7 @@ import time
 from pysat.card import CardEnc, EncType, ITotalizer
 from pysat.solvers import Solver
 
+from bille.instances.interrupts import held_back
 from bille.instances.limits import address_room
 
 from . import SAT, UNKNOWN, UNSAT
@@ -32,14 +33,15 @@ class SatBackend(Backend):
     def __init__(self, model: Model, cuts=None, solver: str = "cadical195") -> None:
         super().__init__(model, cuts)
         self.top = model.num_vars
-        self.solver = Solver(name=solver)
         self.interruptible = not solver.startswith("cadical")
-        self.solver.append_formula(model.clauses)
-        self.num_clauses = len(model.clauses)
-        for group in model.exactly_one:
-            self._card(group, exactly=True)
-        for group in model.at_most_one:
-            self._card(group, exactly=False)
+        with held_back():  # the encoders would turn a Ctrl-C into an error of their own
+            self.solver = Solver(name=solver)
+            self.solver.append_formula(model.clauses)
+            self.num_clauses = len(model.clauses)
+            for group in model.exactly_one:
+                self._card(group, exactly=True)
+            for group in model.at_most_one:
+                self._card(group, exactly=False)
         self._totalizers: dict[tuple, ITotalizer] = {}
         self._stopped = False
 
@@ -98,10 +100,11 @@ class SatBackend(Backend):
         lits = tuple(-v for v in objective.lits) if objective.maximize else tuple(objective.lits)
         totalizer = self._totalizers.get(lits)
         if totalizer is None:
-            totalizer = ITotalizer(lits=list(lits), ubound=cost + 1, top_id=self.top)
-            self._totalizers[lits] = totalizer
-            self.top = totalizer.top_id
-            self.add_clauses(totalizer.cnf.clauses)
+            with held_back():
+                totalizer = ITotalizer(lits=list(lits), ubound=cost + 1, top_id=self.top)
+                self._totalizers[lits] = totalizer
+                self.top = totalizer.top_id
+                self.add_clauses(totalizer.cnf.clauses)
         return [-totalizer.rhs[cost]]
 
     def _solve(self, assumptions, deadline, objective, hint) -> Outcome:
@@ -129,7 +132,8 @@ class SatBackend(Backend):
         while True:
             self.solver.conf_budget(BUDGET)
             before = self.solver.accum_stats().get("conflicts", 0)
-            result = self.solver.solve_limited(assumptions=assumptions, expect_interrupt=expect_interrupt)
+            with held_back():  # one conflict budget: Ctrl-C lands after it, as a KeyboardInterrupt
+                result = self.solver.solve_limited(assumptions=assumptions, expect_interrupt=expect_interrupt)
             self.stats["conflicts"] += self.solver.accum_stats().get("conflicts", 0) - before
             if result is True:
                 return Outcome(SAT, self.solver.get_model())

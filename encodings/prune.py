@@ -84,7 +84,7 @@ def candidate_cells(instance: Instance, poses: list[list[np.ndarray]], options) 
             seen = np.zeros(g.num_poses, bool)
             for mask in poses[i]:
                 seen |= mask
-            places = np.flatnonzero(g.kind == Kind.PLACE)
+            places = np.flatnonzero(g.kind == int(Kind.PLACE))
             if len(places):
                 t = g.target[seen][:, places]
                 cand[t[t >= 0]] = True
@@ -99,7 +99,7 @@ def change_window(instance: Instance, poses: list[list[np.ndarray]], T: int) -> 
     before and its goal value after."""
     window = {}
     for i, g in enumerate(instance.world.graphs):
-        manip = np.flatnonzero(np.isin(g.kind, (Kind.PICK, Kind.PLACE)))
+        manip = np.flatnonzero(np.isin(g.kind, (int(Kind.PICK), int(Kind.PLACE))))
         if not len(manip):
             continue
         for t in range(1, T + 1):

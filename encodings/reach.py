@@ -48,7 +48,7 @@ class Reach:
 
 
 def _kinds(g, kind) -> np.ndarray:
-    return np.flatnonzero(g.kind == kind)
+    return np.flatnonzero(g.kind == int(kind))
 
 
 def _targets(g, poses: np.ndarray, actions: np.ndarray) -> np.ndarray:

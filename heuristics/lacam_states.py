@@ -134,7 +134,7 @@ class StateSpace:
         dist = self._distances(state, i, must_go, must_fill)
         ranked = []
         for a in candidate_actions(self.instance, state, i):
-            kind, target = g.kind[a], int(g.target[p, a])
+            kind, target = int(g.kind[a]), int(g.target[p, a])  # plain ints: numpy meets no enum
             if kind == Kind.PICK:
                 score = -1 if must_go[target] else UNREACHABLE + 1
             elif kind == Kind.PLACE:
@@ -212,6 +212,6 @@ class StateSpace:
             return None if violation.robot in pinned else violation.robot
         for i in reversed(order):
             g = self.world.graphs[i]
-            if i not in pinned and g.kind[choice[i]] in (Kind.PICK, Kind.PLACE):
+            if i not in pinned and int(g.kind[choice[i]]) in (Kind.PICK, Kind.PLACE):
                 return i
         return None

@@ -57,7 +57,7 @@ def facing_feet(world) -> dict[int, list[np.ndarray]]:
     """For each cell, per moveset, the feet ``int[k, 2]`` of the poses that pick or place there."""
     out: dict[int, list[np.ndarray]] = {}
     for graph, _ in world.groups:
-        kinds = graph.kind
+        kinds = graph.kind.tolist()
         manip = [a for a in range(graph.num_actions) if kinds[a] in (Kind.PICK, Kind.PLACE)]
         cells, poses = [], []
         for a in manip:

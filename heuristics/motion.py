@@ -12,6 +12,7 @@ towards their goals (:mod:`.goals`), by the loop's deadline. Every layer has the
 """
 from __future__ import annotations
 
+import time
 from typing import Callable, Protocol
 
 from bille.instances import Instance
@@ -76,10 +77,14 @@ class TemporalAStar:
         self.stats = stats
 
     def step(self, s, fixed, goals, intents, deadline):
+        self.failure = None
         joint, blocked = self._window(s, fixed, goals, intents)
         for _ in range(len(s.Q)):
             if blocked is None:
                 break
+            if deadline is not None and time.perf_counter() > deadline:  # between replans too
+                self.failure = "timeout"
+                return None
             shift_up(s.Q, blocked)
             self.stats["priority_shifts"] += 1
             self.stats["replans"] += 1

@@ -33,7 +33,7 @@ class Relaxed:
     def edges(self) -> csr_matrix:
         """Walking steps ``p -> q`` (``p != q``), unit weight."""
         g = self.graph
-        walking = np.isin(g.kind, (Kind.WAIT, Kind.MOTION))
+        walking = np.isin(g.kind, (int(Kind.WAIT), int(Kind.MOTION)))
         p, a = np.nonzero((g.succ >= 0) & walking[None, :] & g.valid[:, None])
         q = g.succ[p, a]
         keep = p != q
@@ -101,7 +101,7 @@ def manipulates_ahead(graph: PoseGraph) -> bool:
     """Whether every pick and place from a pose targets one and the same cell (a Bill-E's cell
     ahead of its front foot): then a carried tile can land elsewhere than where it was picked
     only after the robot moved."""
-    acts = np.flatnonzero(np.isin(graph.kind, (Kind.PICK, Kind.PLACE)))
+    acts = np.flatnonzero(np.isin(graph.kind, (int(Kind.PICK), int(Kind.PLACE))))
     if not len(acts):
         return True
     t = np.where(graph.succ[:, acts] >= 0, graph.target[:, acts], -1)

@@ -37,13 +37,13 @@ def action_kinds(instance: Instance, ids: np.ndarray) -> np.ndarray:
 def metrics(instance: Instance, ids: np.ndarray) -> Metrics:
     """Metrics of a bound schedule (action ids ``int[m, L]``)."""
     kinds = action_kinds(instance, ids)
-    active = np.flatnonzero((kinds != Kind.WAIT).any(axis=0))
+    active = np.flatnonzero((kinds != int(Kind.WAIT)).any(axis=0))
     makespan = int(active[-1]) + 1 if len(active) else 0
     kinds = kinds[:, :makespan]
     return Metrics(
         makespan=makespan,
-        tiles_traveled=int((kinds == Kind.MOTION).sum()),
-        waits=int((kinds == Kind.WAIT).sum()),
-        picks=int((kinds == Kind.PICK).sum()),
-        places=int((kinds == Kind.PLACE).sum()),
+        tiles_traveled=int((kinds == int(Kind.MOTION)).sum()),
+        waits=int((kinds == int(Kind.WAIT)).sum()),
+        picks=int((kinds == int(Kind.PICK)).sum()),
+        places=int((kinds == int(Kind.PLACE)).sum()),
     )

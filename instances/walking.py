@@ -33,7 +33,7 @@ class Walk:
         self.graph = graph
         self.tiles = np.asarray(tiles, dtype=bool)
         self.carrying = carrying
-        walking = np.isin(graph.kind, (Kind.WAIT, Kind.MOTION))
+        walking = np.isin(graph.kind, (int(Kind.WAIT), int(Kind.MOTION)))
         standing = graph.valid & self.tiles[np.maximum(graph.feet, 0)].all(axis=1)
         lands = self.tiles[np.maximum(graph.need, 0)].all(axis=2)
         ok = (graph.succ >= 0) & walking[None, :] & standing[:, None] & lands
@@ -42,7 +42,7 @@ class Walk:
         self.succ = np.where(ok, graph.succ, -1).astype(np.int32)
         self.standing = standing
         self.wait = graph.wait
-        manipulating = np.isin(graph.kind, (Kind.PICK, Kind.PLACE))
+        manipulating = np.isin(graph.kind, (int(Kind.PICK), int(Kind.PLACE)))
         self._targets = np.where(manipulating[None, :] & standing[:, None], graph.target, -1)
         self._moves: dict[int, list[tuple[int, int, frozenset]]] = {}
         self._dist: LRU[np.ndarray] = LRU(256)
@@ -95,7 +95,7 @@ class Walk:
     def manipulation(self, pose: int, cell: int, kind: Kind) -> int | None:
         """The pick (or place) action of ``pose`` that targets ``cell``, or None."""
         for a in np.flatnonzero(self._targets[pose] == cell).tolist():
-            if self.graph.kind[a] == kind:
+            if int(self.graph.kind[a]) == kind:
                 return a
         return None
 

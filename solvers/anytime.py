@@ -195,6 +195,11 @@ class _Anytime:
             rise.step(time.perf_counter())  # what the bound search sent while the last part ran
         except KeyboardInterrupt:  # Ctrl-C, or a subscriber that raised it: keep what is held
             stopped = True
+            if isinstance(rise, Background):  # the bounds the child proved and sent before it
+                try:
+                    rise.step(time.perf_counter())
+                except KeyboardInterrupt:
+                    pass
         finally:
             if rise is not None:
                 rise.close()

@@ -123,7 +123,8 @@ def test_interrupted_keeps_the_best_schedule_and_bound_and_leaves_no_child(paral
     result = solve(inst, "anytime", time_limit=120, parallel=parallel, on_schedule=_stop)
     assert result.status == "interrupted"
     assert validate(inst, result.schedule).metrics.makespan == result.stats["first"]["makespan"] == OPTIMA[inst]
-    assert result.lower_bound == anytime.lower_bound(inst).lower < OPTIMA[inst]
+    # the static bound, or what the child proved and sent before the Ctrl-C (read before it is closed)
+    assert anytime.lower_bound(inst).lower <= result.lower_bound <= OPTIMA[inst]
     assert result.stats["bound_search"] == ("child process" if parallel else "in turns: parallel is off")
     assert not multiprocessing.active_children()
 

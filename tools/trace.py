@@ -118,10 +118,10 @@ def trace(instance: Instance, schedule: Schedule | None = None, label: str = "sc
         actions.append(tuple(movesets[i].actions[ids[i, done]].name for i in range(m)))
 
     pad = len(states) - 1 - done
-    traveled = np.concatenate([[0], np.cumsum((kinds == Kind.MOTION).sum(axis=0)), np.zeros(pad, np.int64)])
+    traveled = np.concatenate([[0], np.cumsum((kinds == int(Kind.MOTION)).sum(axis=0)), np.zeros(pad, np.int64)])
     if pad:
         traveled[-pad:] = traveled[done]
-    waiting = np.concatenate([[0], (kinds == Kind.WAIT).sum(axis=0), np.zeros(pad, np.int64)])
+    waiting = np.concatenate([[0], (kinds == int(Kind.WAIT)).sum(axis=0), np.zeros(pad, np.int64)])
     return Trace(instance, label, np.array([s.tiles for s in states]), front, back,
                  np.array([s.carrying for s in states], dtype=bool).reshape(len(states), m),
                  tuple(swept), tuple(actions), traveled.astype(np.int64), waiting.astype(np.int64), violation)

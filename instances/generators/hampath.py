@@ -248,7 +248,7 @@ def search_optimum(inst: Instance, limit: int, *, max_states: int = 2_000_000):
             for a in range(graph.num_actions):
                 if graph.succ[p, a] < 0:
                     continue
-                if graph.kind[a] in (Kind.PICK, Kind.PLACE) and int(graph.target[p, a]) not in task_set:
+                if int(graph.kind[a]) in (Kind.PICK, Kind.PLACE) and int(graph.target[p, a]) not in task_set:
                     continue
                 new = apply(world, s, [a])
                 if not isinstance(new, State):

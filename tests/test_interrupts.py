@@ -1,0 +1,74 @@
+"""Ctrl-C around C code: recorded inside :func:`held_back`, raised as a KeyboardInterrupt after it;
+numpy values never compared with enum members (where a pending interrupt could be cleared)."""
+import ast
+import os
+import signal
+from pathlib import Path
+
+import pytest
+
+from bille.instances.interrupts import held_back
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_a_ctrl_c_inside_the_block_is_raised_after_it():
+    done = []
+    with pytest.raises(KeyboardInterrupt):
+        with held_back():
+            os.kill(os.getpid(), signal.SIGINT)
+            done.append("the block went on")
+    assert done == ["the block went on"]
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+def test_without_a_ctrl_c_nothing_is_raised_and_the_handler_is_restored():
+    with held_back():
+        pass
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+def test_the_sat_back_end_builds_its_encodings_with_ctrl_c_held_back(monkeypatch):
+    """A Ctrl-C during python-sat's card encoder (C code, which turns it into an error of its own)
+    is held back: the encoding is finished, then a KeyboardInterrupt is raised."""
+    from pysat.card import CardEnc
+
+    from bille.encodings import cnf
+    from bille.encodings.model import Options, build
+    from bille.instances import load_instance
+    from bille.instances.bundled import bundled_path
+
+    real, calls = CardEnc.atmost, []
+
+    def interrupted(*args, **kwargs):
+        if not calls:
+            os.kill(os.getpid(), signal.SIGINT)
+        calls.append(1)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(cnf.CardEnc, "atmost", interrupted)
+    model = build(load_instance(bundled_path("lt-4")), 4, Options())
+    groups = sum(len(g) > 6 for g in (*model.exactly_one, *model.at_most_one))
+    with pytest.raises(KeyboardInterrupt):
+        cnf.SatBackend(model, solver="minisat22")
+    assert groups > 1 and len(calls) == groups
+
+
+def test_no_numpy_value_meets_an_enum_member():
+    """``graph.kind[...]`` is a numpy value: compared with a ``Kind`` member, numpy looks the
+    member up in Python and may clear a pending Ctrl-C. The code compares plain ints."""
+    offenders = []
+    for path in ROOT.glob("*/**/*.py"):
+        if ".venv" in path.parts or "tests" in path.parts:
+            continue
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Compare):
+                sides = [node.left, *node.comparators]
+                kinds = [s for s in sides if isinstance(s, ast.Subscript) and isinstance(s.value, ast.Attribute)
+                         and s.value.attr == "kind"]
+                enums = [s for s in ast.walk(node) if isinstance(s, ast.Attribute) and isinstance(s.value, ast.Name)
+                         and s.value.id == "Kind"]
+                if kinds and enums:
+                    offenders.append(f"{path.relative_to(ROOT)}:{node.lineno}")
+    assert not offenders, offenders
