@@ -156,7 +156,9 @@ def status_text(result) -> str:
 def shown_status(status: str, objective: str | None) -> str:
     """:func:`status_text` from a status and the objective it is optimal for (None: the makespan)."""
     if status == "optimal" and objective:
-        return f"optimal ({objective.split(', then')[0].split(' (')[0]})"
+        name = objective.split(" (")[0].split(", then")[0].split(", walking only")[0]
+        restricted = " over walking-only schedules" if "walking only" in objective else ""
+        return f"optimal ({name}{restricted})"
     return status
 
 
