@@ -30,6 +30,7 @@ class Schedule:
     meta: dict[str, Any] | None = field(default=None, hash=False)
     origin: Source | None = field(default=None, compare=False, hash=False, repr=False)
     ids: tuple | None = field(default=None, compare=False, hash=False, repr=False)
+    instance: dict[str, str] | None = field(default=None, compare=False, hash=False)  # :func:`identity`
 
     @property
     def num_robots(self) -> int:
@@ -45,12 +46,44 @@ class Schedule:
         With no robots the schedule is empty (length 0), whatever the matrix's shape."""
         ids = np.asarray(ids, dtype=np.int64)
         if instance.num_robots == 0:
-            return cls((), meta)
+            return cls((), meta, instance=identity(instance))
         movesets = instance.movesets
         ids = ids.reshape(instance.num_robots, -1).copy()
         ids.flags.writeable = False
         names = tuple(tuple(ms.actions[a].name for a in row) for ms, row in zip(movesets, ids.tolist()))
-        return cls(names, meta, None, (movesets, ids))
+        return cls(names, meta, None, (movesets, ids), identity(instance))
+
+
+def identity(instance: Instance) -> dict[str, str]:
+    """What a schedule records of the instance it was made for: its name and the SHA-256 of its
+    canonical text (:func:`~.writing.dump_instance`: the same for the same instance whatever its
+    file's comments or layout). Computed once per instance."""
+    found = _IDENTITIES.get(id(instance))
+    if found is None or found[0] is not instance:
+        import hashlib
+
+        from .writing import dump_instance
+
+        digest = hashlib.sha256(dump_instance(instance).encode()).hexdigest()
+        if len(_IDENTITIES) > 256:
+            _IDENTITIES.clear()
+        found = _IDENTITIES[id(instance)] = (instance, {"name": instance.name, "sha256": digest})
+    return dict(found[1])
+
+
+_IDENTITIES: dict[int, tuple[Instance, dict[str, str]]] = {}
+
+
+def written_for(instance: Instance, schedule: Schedule) -> str | None:
+    """Why ``schedule`` may not be meant for ``instance``: it names another instance (by content;
+    a renamed copy of the same instance is the same). None when it names this one or none."""
+    named = schedule.instance
+    if not named or named.get("sha256") == identity(instance)["sha256"]:
+        return None
+    where = schedule.origin.name if schedule.origin is not None and schedule.origin.name else "the schedule"
+    if named.get("name") == instance.name:
+        return f"{where} was written for another version of '{instance.name}' (its content differs)"
+    return f"{where} was written for '{named.get('name')}', not '{instance.name}'"
 
 
 def bind(instance: Instance, schedule: Schedule) -> np.ndarray:
@@ -93,7 +126,14 @@ def schedule_from_text(text: str, name: str | None = None) -> Schedule:
 
 
 def parse_schedule(data, src: Source) -> Schedule:
-    top = expect_mapping(data, src, (), required=("robots",), optional=("meta",))
+    top = expect_mapping(data, src, (), required=("robots",), optional=("instance", "meta"))
+    named = None
+    if "instance" in top:
+        named = expect_mapping(top["instance"], src, ("instance",), required=("name", "sha256"))
+        for key in ("name", "sha256"):
+            if not isinstance(named[key], str) or not named[key]:
+                raise src.fail(("instance", key), f"expected the instance's {key} as text, got {named[key]!r}")
+        named = {"name": named["name"], "sha256": named["sha256"]}
     robots = expect_list(top["robots"], src, ("robots",), "a list with one list of actions per robot")
     rows = []
     for i, row in enumerate(robots):
@@ -109,17 +149,26 @@ def parse_schedule(data, src: Source) -> Schedule:
     meta = top.get("meta")
     if meta is not None and not isinstance(meta, dict):
         raise src.fail(("meta",), "expected a mapping")
-    return Schedule(tuple(rows), meta, src)
+    return Schedule(tuple(rows), meta, src, instance=named)
 
 
 def dump_schedule(schedule: Schedule) -> str:
-    """The canonical YAML text of a schedule (one flow list per robot)."""
-    out = ["robots:" if schedule.actions else "robots: []"]
+    """The canonical YAML text of a schedule (one flow list per robot), with the instance it was
+    made for where known."""
+    out = []
+    if schedule.instance:
+        out.append(f"instance: {{name: {_flow(schedule.instance['name'])}, sha256: {schedule.instance['sha256']}}}")
+    out.append("robots:" if schedule.actions else "robots: []")
     out += ["  - [" + ", ".join(row) + "]" for row in schedule.actions]
     if schedule.meta is not None:
         text = yaml.safe_dump(schedule.meta, sort_keys=False, default_flow_style=False, width=100).rstrip()
         out += ["meta:"] + ["  " + line for line in text.splitlines()] if schedule.meta else ["meta: {}"]
     return "\n".join(out) + "\n"
+
+
+def _flow(text: str) -> str:
+    """``text`` as a YAML flow scalar (quoted where it must be)."""
+    return yaml.safe_dump([text], default_flow_style=True, width=10_000).strip()[1:-1]
 
 
 def save_schedule(schedule: Schedule, path: str | Path) -> None:

@@ -9,7 +9,7 @@ from bille.instances import InstanceError, ScheduleError, dump_instance, load_in
 from bille.instances.files import write_atomic
 from bille.instances.interop import (from_mrp, is_mrp, map_text, mrp_name, scen_text, schedule_from_mrp,
                                      schedule_to_mrp, to_mrp)
-from bille.instances.schedule import dump_schedule, load_schedule
+from bille.instances.schedule import dump_schedule, load_schedule, written_for
 from bille.instances.yamlsource import load_yaml_file
 
 from .common import EXIT_OK, instance_arg, writable
@@ -85,7 +85,11 @@ def _read(source: str, instance_path, agents, map_path, schedules: bool = True):
     if isinstance(data, dict) and "schedule" in data:
         src.error = ScheduleError
         return "schedule", schedule_from_mrp(inst, data, src)
-    return "schedule", load_schedule(path)
+    schedule = load_schedule(path)
+    why = written_for(inst, schedule)
+    if why is not None:
+        click.echo(f"warning: {why}", err=True)
+    return "schedule", schedule
 
 
 def _write_instance(inst, target: str) -> None:

@@ -8,7 +8,7 @@ from bille.instances import InstanceError, check_instance, load_instance
 from bille.instances.bundled import SCHEDULE_SUFFIX, bundled_names, bundled_path
 from bille.solvers import validate
 
-from .common import (EXIT_NO, EXIT_OK, instance_arg, label_of, print_json, record_traces, robots, schedule_arg, trace_of,
+from .common import (EXIT_NO, EXIT_OK, instance_arg, label_of, print_json, record_traces, robots, schedule_for, trace_of,
                      writable)
 from .render import describe, draw
 
@@ -28,7 +28,7 @@ def check(instance: str, schedule: str, as_json: bool, rrd: str | None, poses_pa
         raise click.BadParameter(f"{poses_path}: expected a .csv or .json file name", param_hint="--poses")
     writable(rrd, poses_path)
     inst = instance_arg(instance)
-    sched = schedule_arg(schedule)
+    sched = schedule_for(schedule, inst)
     report = validate(inst, sched)
     if rrd:
         record_traces([trace_of(inst, sched, label_of(schedule))], rrd, quiet=as_json)

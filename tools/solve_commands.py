@@ -1,6 +1,8 @@
 """Commands that solve: ``solve`` one instance, ``plan-sequence``, and the ``gap`` report."""
 from __future__ import annotations
 
+import os
+
 import click
 import yaml
 
@@ -55,6 +57,8 @@ def solve_(instance: str, method: str, epsilon, horizon, time_limit, threads, lo
         result = solve(inst, method, progress=line, bound=bound, **options)
     if output and result.schedule is not None:
         save_schedule(result.schedule, output)
+    elif output and os.path.exists(output):  # never a stale file taken for this run's answer
+        click.echo(f"no schedule: {output} left as it was, not written by this run", err=True)
     if rrd:  # without a schedule the recording shows the instance
         record_traces([trace_of(inst, result.schedule, method)], rrd, quiet=as_json)
     if as_json:

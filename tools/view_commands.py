@@ -5,7 +5,7 @@ from pathlib import Path
 
 import click
 
-from .common import (EXIT_NO, EXIT_OK, instance_arg, label_of, record_traces, schedule_arg, stderr_console, trace_of,
+from .common import (EXIT_NO, EXIT_OK, instance_arg, label_of, record_traces, schedule_for, stderr_console, trace_of,
                      unique, writable)
 
 
@@ -35,7 +35,7 @@ def view(instance: str, schedules, rrd, spawn: bool, png, gif, frames: str, fps:
     writable(rrd, png, gif)
     inst = instance_arg(instance)
     names = list(labels) or unique([label_of(arg) for arg in schedules])
-    traces = [trace_of(inst, schedule_arg(arg), name) for arg, name in zip(schedules, names)] or [trace_of(inst, None, inst.name)]
+    traces = [trace_of(inst, schedule_for(arg, inst), name) for arg, name in zip(schedules, names)] or [trace_of(inst, None, inst.name)]
     if gif and Path(gif).suffix.lower() not in ("", ".gif"):
         raise click.BadParameter(f"{gif}: an animation is written as .gif", param_hint="--gif")
     if png:

@@ -82,9 +82,10 @@ class _Progress:
 @click.option("--sim-delay", type=click.FloatRange(min=0), default=0.0, metavar="MS", help="Simulated robots: report delay.")
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of the simulated robots' faults.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of text.")
+@click.option("--force", is_flag=True, help="Run a schedule that names another instance than INSTANCE.")
 def run(instance, schedule, journal_in, replan, broker, bind, robots, secrets_path, fleet, journal, step_timeout,
         on_fault, retries, replan_method, reconnect_timeout, connect_timeout, window, sim_fault_rate, sim_delay, seed,
-        as_json) -> int:
+        as_json, force) -> int:
     """Execute SCHEDULE of INSTANCE on robots over MQTT, one synchronized step at a time.
 
     Exit 0 when the robots reached the goal, 1 when the run stopped safely after a fault (resume
@@ -92,6 +93,7 @@ def run(instance, schedule, journal_in, replan, broker, bind, robots, secrets_pa
     """
     from bille.instances import InstanceError, ScheduleError, load_instance
     from bille.instances.bundled import resolve
+    from bille.instances.schedule import written_for
     from bille.solvers import METHODS, load_schedule
 
     from . import session
@@ -127,6 +129,9 @@ def run(instance, schedule, journal_in, replan, broker, bind, robots, secrets_pa
             raise click.UsageError("--replan goes with --resume JOURNAL")
         inst_path, sched_path = resolve(instance, InstanceError), resolve(schedule, ScheduleError)
         inst, sched = load_instance(inst_path), load_schedule(sched_path)
+        why = written_for(inst, sched)
+        if why is not None and not force:
+            raise ScheduleError(f"{why}; --force to run it anyway")
         path = Path(journal or f"{inst.name}-{datetime.now():%Y%m%d-%H%M%S}.journal.jsonl")
         settings["fleet"] = fleet
         with _Progress(not as_json and sys.stderr.isatty(), sched.length) as bar:
