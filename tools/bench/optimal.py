@@ -78,7 +78,7 @@ def peer_rows(binary: Path, files: list[Path], time_limit: float):
         try:
             inst = from_mrp(yaml.safe_load(path.read_text()), path.stem, str(path))
         except (InstanceError, yaml.YAMLError) as exc:
-            row["reason"] = str(exc).splitlines()[0]
+            row["reason"] = str(exc).splitlines()[0].split(": ", 1)[-1]
             yield row
             continue
         result = solved(solve(inst, "cbs", time_limit=time_limit))
