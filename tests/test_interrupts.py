@@ -72,3 +72,40 @@ def test_no_numpy_value_meets_an_enum_member():
                 if kinds and enums:
                     offenders.append(f"{path.relative_to(ROOT)}:{node.lineno}")
     assert not offenders, offenders
+
+
+CASES = [("bridge-2", "sat"), ("bridge-2", "cpsat"), ("lt-1", "anytime"), ("lt-6", "mstar"), ("lt-1", "lacam"),
+         ("lt-6", "temporal-astar"), ("compare-6", "cbs"), ("lt-6", "anytime")]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", range(len(CASES)))
+def test_a_ctrl_c_at_a_random_moment_ends_the_solve_interrupted(seed):
+    """SIGINT at a seeded random moment into an in-process solve: the call returns (no exception
+    of any kind), ``interrupted`` unless it had finished, with a valid schedule where it has one."""
+    import random
+    import threading
+
+    from bille.instances import load_instance
+    from bille.instances.bundled import bundled_path
+    from bille.solvers import solve, validate
+
+    name, method = CASES[seed]
+    inst = load_instance(bundled_path(name))
+    sent = []
+
+    def ctrl_c() -> None:
+        sent.append(True)
+        os.kill(os.getpid(), signal.SIGINT)
+
+    timer = threading.Timer(random.Random(seed).uniform(0.05, 1.5), ctrl_c)
+    timer.start()
+    try:
+        result = solve(inst, method, time_limit=60)
+    finally:
+        timer.cancel()
+        timer.join()
+    if sent:
+        assert result.status == "interrupted", (name, method, result.status)
+    if result.schedule is not None:
+        assert validate(inst, result.schedule).valid

@@ -345,6 +345,35 @@ def bench_cbs(instances, binary: str, time_limit: float) -> int:
     return EXIT_OK
 
 
+@bench.command("interrupt")
+@click.option("--runs", type=click.IntRange(min=1), default=30, show_default=True, help="Runs in all.")
+@click.option("--pairs", default="lt-1:anytime,lt-6:anytime,bridge-2:cpsat,bridge-2:sat,lt-6:mstar,lt-1:lacam",
+              show_default=True, help="Comma-separated INSTANCE:METHOD, taken in turn.")
+@click.option("--time-limit", type=click.FloatRange(min=1), default=20.0, show_default=True, help="Each solve's limit.")
+@click.option("--seed", type=int, default=0, show_default=True, help="Seed of the moments the signal is sent.")
+def bench_interrupt(runs: int, pairs: str, time_limit: float, seed: int) -> int:
+    """Ctrl-C as a terminal sends it: SIGINT to each solve's process group at a random moment;
+    exit codes, seconds to exit, tracebacks, schedules written, signals lost."""
+    from .interrupt import runs as interrupt_runs
+    from .interrupt import table
+
+    chosen = []
+    for item in _names(pairs):
+        instance, _, method = item.partition(":")
+        if not method:
+            raise click.BadParameter(f"{item!r}: expected INSTANCE:METHOD", param_hint="--pairs")
+        chosen.append((instance, method))
+    rows = []
+    for k, row in enumerate(interrupt_runs(chosen, runs, time_limit, seed), 1):
+        rows.append(row)
+        after = "" if row["after_s"] is None else f" after {row['after_s']} s"
+        click.echo(f"[{k}/{runs}] {row['instance']} {row['method']}: signal at {row['at']} s, exit {row['code']}{after}",
+                   err=True)
+    for line in table(rows):
+        click.echo(line)
+    return EXIT_OK
+
+
 @bench.command("lacam")
 @click.option("--size", type=click.IntRange(8, 512), default=64, show_default=True)
 @click.option("--robots", default="50,100,200", show_default=True, help="Comma-separated robot counts.")
