@@ -19,7 +19,7 @@ from typing import Any, Callable
 from bille.instances import OptionError
 
 _AT_LEAST = {"threads": 1, "chunk": 1, "horizon": 1, "max_steps": 0, "max_states": 1, "max_expansions": 1,
-             "max_shifts": 0, "max_nodes": 1, "improve": 0, "window": 2, "max_makespan": 1, "first_horizon": 1, "travel_time": 0, "epsilon": 1, "d_tr": 0, "seed": 0}
+             "max_shifts": 0, "max_nodes": 1, "improve": 0, "window": 2, "max_makespan": 1, "first_horizon": 1, "travel_time": 0, "epsilon": 1, "w": 1, "d_tr": 0, "seed": 0}
 
 
 def check_options(method: str, plan: Callable, options: dict[str, Any], internal: tuple[str, ...] = ()) -> dict:

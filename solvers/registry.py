@@ -107,6 +107,30 @@ def _loop_only(method: str, **options) -> None:
             raise OptionError(f"{method}: {name} is for instances that move tiles (the reconfiguration loop)")
 
 
+ABOUT = {  # method -> (what it plans for, what it proves); `bille methods` and `-O help` print them
+    "auto": ("the method the instance calls for, named in its output: the brute force on tiny state spaces, "
+             "cbs on classic MAPF, anytime otherwise", "what the method it ran proves"),
+    "astar": ("least sum of costs (then makespan) over walking-only schedules, on a fixed structure",
+              "optimal with epsilon 1"),
+    "cbs": ("least sum of costs (or makespan) on a fixed structure, classic or Bill-E collisions; see docs/cbs.md",
+            "optimal with w 1 (over every schedule where no free cell touches a tile); a lower bound on the "
+            "sum of costs otherwise"),
+    "mstar": ("as astar, by subdimensional expansion; on a reconfiguration, the loop's motion layer",
+              "optimal with epsilon 1 on a fixed structure; nothing on a reconfiguration"),
+    "temporal-astar": ("the paper's prioritized planner in a window of H steps; on a reconfiguration, the loop's "
+                       "motion layer", "nothing (feasible schedules)"),
+    "lacam": ("LaCAM*: complete and anytime; on a reconfiguration, the loop then a search over whole states",
+              "optimal walking makespan when its search space is exhausted; infeasible when the whole-state "
+              "search is"),
+    "cpsat": ("least makespan, by the time-expanded model on CP-SAT; then tiles traveled",
+              "optimal makespan; a lower bound when it stops early"),
+    "sat": ("least makespan, by the time-expanded model on a SAT solver (python-sat)",
+            "optimal makespan; a lower bound when it stops early"),
+    "anytime": ("a schedule at once, then shorter ones, while a lower bound rises", "the makespan's lower bound; "
+                "optimal when the two meet (the certified gap otherwise)"),
+    "bfs": ("least makespan by breadth-first search over joint states (tiny instances)", "optimal makespan"),
+}
+
 CLASSIC = ("auto", "astar", "cbs", "lacam", "bfs")  # the methods that plan under classic collisions (DESIGN §3)
 
 class Registry(MutableMapping):

@@ -166,3 +166,22 @@ def test_python_dash_m_bille_and_the_version():
     assert done.returncode == 0 and done.stdout.strip() == f"bille {bille.__version__}"
     public = set(bille.solvers.__all__)
     assert {"solve", "validate", "METHODS"} <= public and not public & {"time", "inspect", "annotations"}
+
+
+def test_methods_lists_every_method_and_what_it_proves(cli, capsys):
+    from bille.solvers import METHODS
+
+    assert cli(["methods"]) == 0
+    out = capsys.readouterr().out
+    for name in METHODS:
+        assert f"\n{name}: " in "\n" + out
+    assert out.count("  proves: ") == len(METHODS)
+
+
+def test_option_help_lists_a_methods_options_without_solving(cli, capsys):
+    assert cli(["solve", "no-such-instance", "-m", "cbs", "-O", "help"]) == 0
+    out = capsys.readouterr().out
+    assert "w           float, default 1.0 (>= 1)" in out and "time_limit  float or none, default 60.0 (> 0 s)" in out
+    assert cli(["methods", "sat"]) == 0
+    assert "solver" in capsys.readouterr().out
+    assert cli(["methods", "slove"]) == 2

@@ -17,6 +17,7 @@ from .convert import convert
 from .execute.commands import robot_sim, run
 from .files_commands import check, list_, show
 from .gen import gen
+from .methods_command import methods
 from .solve_commands import gap, plan_sequence, solve_
 from .sweep.commands import sweep
 from .view_commands import view
@@ -30,7 +31,8 @@ def cli() -> None:
     INSTANCE and SCHEDULE are YAML files, or the names of bundled ones (see 'bille list').
     """
 
-for command in (check, show, list_, solve_, plan_sequence, gap, sweep, view, gen, convert, run, robot_sim, bench):
+for command in (check, show, list_, solve_, methods, plan_sequence, gap, sweep, view, gen, convert, run, robot_sim,
+                bench):
     cli.add_command(command)
 
 

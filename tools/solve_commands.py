@@ -45,6 +45,15 @@ def solve_(instance: str, method: str, epsilon, horizon, time_limit, threads, lo
     lower bound proved, and the exit code is 130."""
     if time_limit is not None and time_limit <= 0:
         raise click.BadParameter("must be positive", param_hint="--time-limit")
+    if "help" in extra:  # -O help: the method's options, nothing solved
+        from .methods_command import describe
+
+        if method not in METHODS:
+            raise click.BadParameter(f"unknown method '{method}' (expected one of: {', '.join(METHODS)})",
+                                     param_hint="-m/--method")
+        for line in describe(method):
+            click.echo(line)
+        return EXIT_OK
     writable(output, rrd)
     given = dict(epsilon=epsilon, horizon=horizon, time_limit=time_limit, threads=threads,
                  load_transfer=load_transfer, d_tr=d_tr)
