@@ -185,3 +185,9 @@ def test_option_help_lists_a_methods_options_without_solving(cli, capsys):
     assert cli(["methods", "sat"]) == 0
     assert "solver" in capsys.readouterr().out
     assert cli(["methods", "slove"]) == 2
+
+
+def test_a_deadlock_says_what_to_try(cli, capsys):
+    assert cli(["solve", "point-4", "-m", "temporal-astar"]) == 1
+    out = capsys.readouterr().out
+    assert "failure: deadlock:" in out and "try -m auto or -m lacam" in out

@@ -138,6 +138,10 @@ def _parse_options(items) -> dict:
 def _explain(inst, key: str, value) -> str:
     if key == "unreachable":
         return "; ".join(f"robot {i} cannot reach its goal {inst.robot_goals[i]} even alone" for i in value)
+    if key == "failure" and "deadlock" in str(value):
+        complete = "-m auto or -m lacam (complete: it finds a schedule whenever one exists)"
+        return (f"{value}: the planner went round in circles, or no priority order it tried let every robot "
+                f"move (it is not complete); try {complete}")
     return str(value)
 
 
