@@ -38,4 +38,9 @@ def resolve(arg: str, error: type[BilleError] = BilleError) -> Path:
     name = arg[:-5] if arg.endswith(".yaml") else arg
     if "/" not in name and (_folder() / f"{name}.yaml").is_file():
         return _folder() / f"{name}.yaml"
-    raise error(f"{arg}: no such file or bundled name (bundled: {', '.join(bundled_names())})")
+    import difflib
+
+    names = bundled_names()
+    close = difflib.get_close_matches(name, names, n=1, cutoff=0.6) if "/" not in name else []
+    hint = f"; did you mean '{close[0]}'?" if close else ""
+    raise error(f"{arg}: no such file or bundled name{hint} (bundled: {', '.join(names)})")

@@ -191,3 +191,8 @@ def test_a_deadlock_says_what_to_try(cli, capsys):
     assert cli(["solve", "point-4", "-m", "temporal-astar"]) == 1
     out = capsys.readouterr().out
     assert "failure: deadlock:" in out and "try -m auto or -m lacam" in out
+
+
+def test_a_mistyped_bundled_name_gets_a_suggestion(cli, capsys):
+    assert cli(["show", "lt4"]) == 2
+    assert "lt4: no such file or bundled name; did you mean 'lt-4'?" in capsys.readouterr().err
