@@ -151,7 +151,8 @@ def check_instance(inst: Instance, src: Source | None = None) -> Instance:
         x, y = start.xy(int(np.flatnonzero(goal.obstacles != start.obstacles)[0]))
         raise src.fail(("goal",), f"obstacles differ from the start grid's at ({x}, {y})")
     for key, grid in (("grid", start), ("goal", goal)):
-        if not is_connected(grid.tiles, w, h):
+        # a MAPF map's free cells may fall into parts (docs/decisions.md, "Classic collisions")
+        if inst.collisions != "classic" and not is_connected(grid.tiles, w, h):
             _disconnected(grid, "start" if key == "grid" else "goal", src, key)
 
     if inst.collisions not in COLLISIONS:

@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import InstanceError, ScheduleError
-from .grid import Grid, detached_cells
+from .grid import Grid
 from .instance import Instance, Robot, check_instance
 from .limits import check_budget, check_size
 from .moveset import load_moveset
@@ -163,8 +163,7 @@ def from_mrp(data: dict, name: str, src: Source | str | None = None) -> Instance
         if not free[y * width + x]:
             raise src.fail(("map", "obstacles", k), f"({x}, {y}) is listed twice")
         free[y * width + x] = False
-    tiles = free.copy()
-    tiles[detached_cells(free, width, height)] = False
+    tiles = free.copy()  # every free cell, in as many parts as the map has: classic collisions allow it
     agents = expect_list(top["agents"], src, ("agents",), "a list of agents")
     if not agents:
         raise src.fail(("agents",), "expected at least one agent")
@@ -179,8 +178,7 @@ def from_mrp(data: dict, name: str, src: Source | str | None = None) -> Instance
         for what in ("start", "goal"):
             x, y = expect_xy(a[what], src, ("agents", k, what))
             if not (0 <= x < width and 0 <= y < height and tiles[y * width + x]):
-                raise src.fail(("agents", k, what), f"({x}, {y}) is not a free cell of the map's largest connected "
-                                                   "part")
+                raise src.fail(("agents", k, what), f"({x}, {y}) is not a free cell of the map")
             pair.append((x, y))
         cells.append(pair)
     grid = Grid.from_masks(width, height, ~free, tiles)

@@ -271,3 +271,19 @@ def test_a_scenario_that_is_not_text_is_one_line(tmp_path, rejects):
     (tmp_path / "s.scen").write_bytes(b"version 1\n0\tm.map\t5\t3\t0\t0\t4\t2\t6\xff\xfe\n")
     rejects(["convert", tmp_path / "s.scen", tmp_path / "o.yaml"], "s.scen: not a text file")
     rejects(["convert", tmp_path / "s.scen", tmp_path / "o.yaml", "--map", tmp_path / "m.map"], "not a text file")
+
+
+def test_a_libmultirobotplanning_map_in_two_parts_is_kept_as_it_is(tmp_path):
+    """Free cells in two parts (as in 24 of its 8x8 benchmark instances): each agent stays in its
+    own; a goal in the other part is infeasible, proved."""
+    from bille.instances.interop import from_mrp
+
+    data = {"map": {"dimensions": [5, 2], "obstacles": [[2, 0], [2, 1]]},
+            "agents": [{"name": "a", "start": [0, 0], "goal": [1, 1]}, {"name": "b", "start": [4, 0], "goal": [3, 1]}]}
+    inst = from_mrp(data, "two-parts")
+    assert int(inst.start.tiles.sum()) == 8
+    result = solve(inst, "cbs")
+    assert result.status == "optimal" and validate(inst, result.schedule).valid
+    assert result.stats["sum_of_costs"] == 4
+    data["agents"][1]["goal"] = [0, 1]
+    assert solve(from_mrp(data, "apart"), "cbs").status == "infeasible"
