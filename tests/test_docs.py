@@ -124,8 +124,9 @@ def _all_params():
     while stack:
         cmd = stack.pop()
         yield from cmd.params
-        if isinstance(cmd, click.Group):
-            stack += cmd.commands.values()
+        if isinstance(cmd, click.Group):  # the top group loads its commands when they are looked up
+            ctx = click.Context(cmd)
+            stack += [cmd.get_command(ctx, name) for name in cmd.list_commands(ctx)]
 
 
 def test_doc_command_lines_are_read_whole(tmp_path):

@@ -5,35 +5,64 @@ infeasible, timeout without schedule), 2 bad input or usage. A user error is one
 """
 from __future__ import annotations
 
+import importlib
 import sys
 
 import click
 
 from bille.instances import BilleError
 
-from .bench.commands import bench
 from .common import EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE
-from .convert import convert
-from .execute.commands import robot_sim, run
-from .files_commands import check, list_, show
-from .gen import gen
-from .methods_command import methods
-from .solve_commands import gap, plan_sequence, solve_
-from .sweep.commands import sweep
-from .view_commands import view
+
+COMMANDS = {  # name -> (module, function, the line bille --help shows); each loaded when it runs
+    "check": ("files_commands", "check", "Check a schedule against the rules of an instance."),
+    "show": ("files_commands", "show", "Draw an instance: sizes, movesets, validity."),
+    "list": ("files_commands", "list_", "List the bundled instances and their schedules."),
+    "solve": ("solve_commands", "solve_", "Solve an instance: status, metrics, schedule."),
+    "methods": ("methods_command", "methods", "What each method plans for, proves, and its options."),
+    "plan-sequence": ("solve_commands", "plan_sequence", "The reconfiguration sequence of an instance."),
+    "gap": ("solve_commands", "gap", "Methods against the optimum: certified gaps."),
+    "sweep": ("sweep.commands", "sweep", "Experiments: instances x methods x options."),
+    "view": ("view_commands", "view", "Schedules as a rerun recording, picture or GIF."),
+    "gen": ("gen", "gen", "Generate instances (random, paper maps, graphs)."),
+    "convert": ("convert", "convert", "Instances and schedules to and from other formats."),
+    "run": ("execute.commands", "run", "Execute a schedule on robots over MQTT."),
+    "robot-sim": ("execute.commands", "robot_sim", "A simulated robot for bille run."),
+    "bench": ("bench.commands", "bench", "Benchmarks, with ratios to baselines of the run."),
+}
 
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100})
+class Commands(click.Group):
+    """The subcommands of :data:`COMMANDS`, each module imported when its command is looked up
+    (click's lazy group), so that a light command starts without loading the others."""
+
+    def list_commands(self, ctx: click.Context) -> list[str]:
+        return sorted(COMMANDS)
+
+    def get_command(self, ctx: click.Context, name: str) -> click.Command | None:
+        if name not in COMMANDS:
+            return None
+        module, function, _ = COMMANDS[name]
+        return getattr(importlib.import_module(f"{__package__}.{module}"), function)
+
+    def resolve_command(self, ctx: click.Context, args: list[str]):
+        try:
+            return super().resolve_command(ctx, args)
+        except click.exceptions.NoSuchCommand:  # suggest from every name, loaded or not
+            raise click.exceptions.NoSuchCommand(str(args[0]), possibilities=list(COMMANDS), ctx=ctx) from None
+
+    def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
+        with formatter.section("Commands"):
+            formatter.write_dl([(name, COMMANDS[name][2]) for name in self.list_commands(ctx)])
+
+
+@click.group(cls=Commands, context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100})
 @click.version_option(None, "--version", package_name="bille", prog_name="bille", message="%(prog)s %(version)s")
 def cli() -> None:
     """Multi-robot reconfiguration of 2D tile structures by Bill-E inchworm robots.
 
     INSTANCE and SCHEDULE are YAML files, or the names of bundled ones (see 'bille list').
     """
-
-for command in (check, show, list_, solve_, methods, plan_sequence, gap, sweep, view, gen, convert, run, robot_sim,
-                bench):
-    cli.add_command(command)
 
 
 def main(argv: list[str] | None = None) -> int:
