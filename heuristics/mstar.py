@@ -127,7 +127,10 @@ class _MStar:
         self.push_vertex(root)
         while self.frontier:
             *_, node = heapq.heappop(self.frontier)
-            if node[0] == "od":
+            if node[0] == "od":  # a partial step: many of them per state with many coupled robots
+                if self.deadline is not None and time.perf_counter() > self.deadline:
+                    stats["failure"] = "time limit"
+                    return "timeout", None
                 self.expand_partial(node)
                 continue
             state = (self.g[node], self.collision[node])
