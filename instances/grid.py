@@ -110,9 +110,29 @@ def components(tiles: np.ndarray, width: int, height: int) -> tuple[np.ndarray, 
     return labels.reshape(-1), int(count)
 
 
+SMALL_GRID = 4096  # cells up to which connectivity is a breadth-first search here, not scipy's labelling
+
+
 def is_connected(tiles: np.ndarray, width: int, height: int) -> bool:
-    """Whether the tile set is non-empty and 4-connected."""
-    return components(tiles, width, height)[1] == 1
+    """Whether the tile set is non-empty and 4-connected. Up to :data:`SMALL_GRID` cells a
+    breadth-first search over the tiles: as fast there as scipy's labelling, and the commands that
+    check an instance then start without importing scipy (0.3 s)."""
+    flat = np.asarray(tiles, dtype=bool).reshape(-1)
+    if flat.size > SMALL_GRID:
+        return components(flat, width, height)[1] == 1
+    cells = np.flatnonzero(flat).tolist()
+    if not cells:
+        return False
+    inside = set(cells)
+    seen, todo = {cells[0]}, [cells[0]]
+    while todo:
+        c = todo.pop()
+        x = c % width
+        for n in (c - width, c + width, c - 1 if x > 0 else -1, c + 1 if x < width - 1 else -1):
+            if n in inside and n not in seen:
+                seen.add(n)
+                todo.append(n)
+    return len(seen) == len(inside)
 
 
 def detached_cells(tiles: np.ndarray, width: int, height: int) -> list[int]:

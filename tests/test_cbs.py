@@ -159,3 +159,57 @@ def test_bad_options_get_one_clear_error(options, message):
 def test_cbs_refuses_instances_that_move_tiles():
     with pytest.raises(OptionError, match="moves tiles"):
         solve(load_instance(bundled_path("lt-4")), "cbs")
+
+
+def test_the_low_level_keeps_the_earliest_arrival_where_time_no_longer_matters():
+    """Past the last constrained time one node stands for all times of a pose: an earlier arrival
+    there must win over a later one with fewer conflicts (it did not, and a path of cost 13 came
+    back where 12 is the least: a 7x4 map, two cells banned from steps 1 and 4 on)."""
+    from collections import deque
+
+    from bille.heuristics.cbs.constraints import RANGE, Table
+    from bille.heuristics.cbs.lowlevel import Agent, Avoid, Path, search
+
+    cells = [(0, 0), (0, 1), (0, 2), (0, 3), (1, 1), (1, 2), (1, 3), (2, 0), (2, 1), (2, 3), (3, 1), (3, 2), (3, 3),
+             (4, 0), (4, 1), (4, 2), (4, 3), (5, 0), (5, 2), (6, 0), (6, 1), (6, 3)]
+    index = {c: k for k, c in enumerate(cells)}
+    adj = [[index[(x + dx, y + dy)] for dx, dy in ((0, -1), (1, 0), (0, 1), (-1, 0)) if (x + dx, y + dy) in index]
+           for x, y in cells]
+
+    def moves(p):
+        return [(0, p, frozenset({p}))] + [(1 + k, v, frozenset({v})) for k, v in enumerate(adj[p])]
+
+    start, goal = index[(6, 1)], index[(2, 1)]
+    dist, todo = {goal: 0}, deque([goal])
+    while todo:
+        u = todo.popleft()
+        for v in adj[u]:
+            if v not in dist:
+                dist[v] = dist[u] + 1
+                todo.append(v)
+    agent = Agent(0, start, moves, [dist.get(v, 10**9) for v in range(len(cells))],
+                  [v == goal for v in range(len(cells))], goal)
+    others = [None] + [Path(tuple(p), (-1,) * len(p), tuple(frozenset({c}) for c in p), len(p) - 1)
+                       for p in [(2, 5, 4, 4, 4), (20, 19, 17, 19, 19)]]
+    table = Table(((RANGE, index[(6, 0)], 4), (RANGE, index[(3, 1)], 1)))
+    avoid = Avoid(others, 0, True, [lambda p: frozenset({p})] * 3)
+    assert search(agent, table, avoid, True).cost == search(agent, table, None, True).cost == 12
+
+
+def test_a_moveset_that_sets_tiles_down_further_away_makes_no_closed_world(tmp_path):
+    """The closed-world proof needs tiles set down next to the front foot; a user's moveset that
+    places two cells ahead could build a bridge, so a walled-off goal is not proved infeasible."""
+    text = (bundled_point_moveset().replace("name: point", "name: far-place")
+            .replace("place-north: {at: [0, 0], place: [0, -1]}", "place-north: {at: [0, 0], place: [0, -2]}"))
+    (tmp_path / "far.yaml").write_text(text)
+    inst = make("TTTT", [{"at": [0, 0]}], moveset=str(tmp_path / "far.yaml"), robot_goals=[[3, 0]])
+    from bille.heuristics.cbs.method import closed_world
+
+    assert not closed_world(inst)
+    assert closed_world(make("TTTT", [{"at": [0, 0]}], moveset="point", robot_goals=[[3, 0]]))
+
+
+def bundled_point_moveset() -> str:
+    from importlib import resources
+
+    return resources.files("bille.instances.movesets").joinpath("point.yaml").read_text()

@@ -9,7 +9,7 @@ import json
 import subprocess
 import sys
 
-HEAVY = ("ortools", "pysat", "rerun", "matplotlib", "dask", "distributed", "scipy.optimize")
+HEAVY = ("ortools", "pysat", "rerun", "matplotlib", "dask", "distributed", "scipy")
 PROBE = """
 import json, sys
 from bille.tools.cli import main

@@ -100,7 +100,7 @@ def forced(agent: Agent, m: MDD | None, conflict, side: int, classic: bool) -> b
         if kind == EDGEC:
             u, v = where if side == 0 else where[::-1]
             return t <= c and m.levels[t - 1] == {u} and m.levels[t] == {v}
-        return m.levels[min(t, c)] == {where}
+        return m.levels[min(t, c)] == {where}  # (never empty: a path of cost c exists)
     if t <= c:
-        return all(where in cells for _, _, cells in m.steps[t])
-    return all(where in agent.stand(p) for p in m.levels[c])
+        return bool(m.steps[t]) and all(where in cells for _, _, cells in m.steps[t])
+    return bool(m.levels[c]) and all(where in agent.stand(p) for p in m.levels[c])

@@ -112,6 +112,9 @@ def allowed(table: Table, classic: bool, p: int, q: int, cells: frozenset, t: in
     return True
 
 
+_UNSEEN = (NEVER, NEVER)
+
+
 class Budget(Exception):
     """The low level ran past its expansion budget or the deadline."""
 
@@ -131,13 +134,15 @@ def search(agent: Agent, table: Table, avoid: Avoid | None, classic: bool, *,
     count = None if avoid is None else avoid.count
     counter = 0
     frontier = [(max(dist[start], min_arrival), 0, 0, counter, start, 0)]
-    best = {(start, 0): 0}
+    # per node, the best (time, conflicts) that reached it; past ``cap`` one node holds all times
+    # of a pose, and an earlier arrival there beats any later one, whatever its conflicts
+    best = {(start, 0): (0, 0)}
     parent: dict[tuple[int, int], tuple[int, int, frozenset]] = {}
     expanded = 0
     found = None
     while frontier:
         f, k, _, _, p, t = heapq.heappop(frontier)
-        if best.get((p, t if t < cap else cap), NEVER) < k:
+        if best[(p, t if t < cap else cap)] < (t, k):
             continue
         if f > cost_cap:
             break
@@ -163,8 +168,8 @@ def search(agent: Agent, table: Table, avoid: Avoid | None, classic: bool, *,
                 continue
             k1 = k if count is None else k + count(p, q, cells, t1)
             key1 = (q, t1 if t1 < cap else cap)
-            if k1 < best.get(key1, NEVER):
-                best[key1] = k1
+            if (t1, k1) < best.get(key1, _UNSEEN):
+                best[key1] = (t1, k1)
                 parent[(q, t1)] = (p, a, cells)
                 counter += 1
                 f1 = t1 + d

@@ -7,6 +7,7 @@ import numpy as np
 
 from bille.instances import Instance, OptionError
 from bille.instances.grid import neighbour_table
+from bille.instances.moveset import Kind
 from bille.instances.result import Result
 from bille.instances.schedule import Schedule
 
@@ -21,18 +22,35 @@ def agents_of(problem: JointProblem) -> list[Agent]:
     return agents
 
 
+def _check_movesets(instance: Instance) -> None:
+    """A robot's cost is the step after which it stands still on its goal; that is joint A*'s
+    (a move between two poses on the goal is free) only if every motion moves the front foot,
+    as in the shipped movesets. A user's moveset with a motion that pivots on the front foot is
+    refused, not answered with a cost defined otherwise."""
+    for ms in instance.movesets:
+        for a in ms.actions:
+            if a.kind == Kind.MOTION and tuple(a.front) == (0, 0):
+                raise OptionError(f"cbs: moveset {ms.name}'s motion '{a.name}' keeps the front foot in place; "
+                                  "conflict-based search needs every motion to move it (astar and mstar plan "
+                                  "with such movesets)")
+
+
 def closed_world(instance: Instance) -> bool:
     """Whether walking schedules are all the schedules that matter: no robot carries a tile and
     no free cell (neither tile nor obstacle) is next to a tile. A tile is set down next to the
     front foot of a robot, which stands on a tile; by induction the tiles are always a part of
     the start's (a pick removes one, a place can only fill a cell a pick emptied). Replacing
     every pick and place by a wait then keeps every rule (the feet still stand on the start's
-    tiles, a wait's collision set is inside the pick's or place's, the start's tiles are
-    connected, the goal's tiles are the start's) and every robot's poses, so the walking optimum
-    is the optimum. Maps converted from MAPF benchmarks are such worlds: every free cell is a
-    tile, or cut off from the tiles by obstacles."""
+    tiles, a wait's collision set is inside the pick's or place's, the tiles never change so the
+    connectivity rule is not called on, the goal's tiles are the start's) and every robot's
+    poses, so the walking optimum is the optimum. Maps converted from MAPF benchmarks are such
+    worlds: every free cell is a tile, or cut off from the tiles by obstacles. A moveset that sets
+    a tile down elsewhere than next to the front foot (a file of the user's) makes no closed world."""
     start = instance.start
     if any(instance.start_state.carrying):
+        return False
+    beside = {(0, -1), (1, 0), (0, 1), (-1, 0)}
+    if any(a.place is not None and tuple(a.place) not in beside for ms in instance.movesets for a in ms.actions):
         return False
     empty = ~(start.tiles | start.obstacles)
     nbr = neighbour_table(instance.width, instance.height)
@@ -68,6 +86,7 @@ def plan(instance: Instance, *, objective: str = "sum-of-costs", w: float = 1.0,
     if w > 1 and objective != "sum-of-costs":
         raise OptionError("cbs: w > 1 bounds the sum of costs; use it with objective=sum-of-costs")
     require_path_planning(instance, "cbs")
+    _check_movesets(instance)
     check_tables(instance, "cbs")
     began = time.perf_counter()
     deadline = None if time_limit is None else began + time_limit
