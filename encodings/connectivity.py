@@ -1,4 +1,4 @@
-"""Connectivity of the tiles (DESIGN §3 rule 5) in the time-expanded model: the eager encoding
+"""Connectivity of the tiles (docs/rules.md, rule 5) in the time-expanded model: the eager encoding
 (layered reachability from the first tile) and the lazy one (cuts added when a solution breaks it).
 """
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""The time-expanded model of an instance over horizon ``T`` (DESIGN §3), as clauses.
+"""The time-expanded model of an instance over horizon ``T`` (docs/rules.md), as clauses.
 
 One variable layout serves both back ends (:mod:`.cpsat`, :mod:`.cnf`): Boolean variables with
 integer ids, clauses, and exactly-one / at-most-one groups.

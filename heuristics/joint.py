@@ -108,7 +108,7 @@ class JointProblem:
     def joint_moves(self, poses: Poses, options: list[list],
                     deadline: float | None = None) -> Iterator[tuple[tuple[int, ...], Poses]]:
         """Joint actions from per-robot move lists whose collision sets are pairwise disjoint
-        (DESIGN §3 rule 3; rules 1, 2 and 4 hold for every walking move on a fixed structure).
+        (docs/rules.md, rule 3; rules 1, 2 and 4 hold for every walking move on a fixed structure).
         Past ``deadline`` (looked at every :data:`CHECK_EVERY` joint actions: ten robots give
         millions of them) raises :class:`OutOfTime`."""
         moves = self._classic_moves(poses, options) if self.instance.collisions == "classic" \
@@ -138,7 +138,7 @@ class JointProblem:
         yield from extend(0, frozenset())
 
     def _classic_moves(self, poses: Poses, options: list[list]):
-        """Joint actions without vertex or swap conflicts (DESIGN §3 "Classic collisions"; point
+        """Joint actions without vertex or swap conflicts (docs/rules.md, "Classic collisions"; point
         robots, whose pose is their cell)."""
         m = len(options)
         actions, nxt = [0] * m, [0] * m

@@ -17,7 +17,7 @@ the best schedule are dropped, and when nothing is left the best schedule is opt
 objective (among walking schedules).
 
 **The configuration generator** (:mod:`.pibt`) is PIBT adapted to robots whose moves occupy
-collision sets (DESIGN §3, rule 3), or the original PIBT under classic collisions. Robots are
+collision sets (docs/rules.md, rule 3), or the original PIBT under classic collisions. Robots are
 decided in the order of the node's priorities: a robot away from its goal gains priority every
 step, one that arrives drops back (LaCAM's rule), so no robot is starved.
 

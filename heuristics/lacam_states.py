@@ -1,7 +1,7 @@
 """LaCAM* over whole states (tiles, poses, loads): a complete planner for reconfiguration.
 
 The search of :mod:`.lacam` over a space whose configurations are whole states of the world
-(DESIGN §3): the tile set, every robot's pose and whether it carries a tile. A robot's moves
+(docs/rules.md): the tile set, every robot's pose and whether it carries a tile. A robot's moves
 are all its candidate actions in that state, picks and places included
 (:func:`~bille.instances.successors.candidate_actions`), so the lazy constraints eventually
 pin every joint action of every reachable state, and the canonical rules

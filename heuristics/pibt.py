@@ -1,5 +1,5 @@
 """LaCAM*'s configuration generators: PIBT (priority inheritance with backtracking, Okumura et
-al., AIJ 2022) for robots whose moves occupy collision sets (DESIGN §3 rule 3), and the original
+al., AIJ 2022) for robots whose moves occupy collision sets (docs/rules.md, rule 3), and the original
 PIBT for classic collisions.
 
 Under rule 3 a robot's collision set contains its cells before the step, so no robot ever enters

@@ -2,7 +2,7 @@
 
 Tiles appear and vanish during a reconfiguration, so the only distances that bound *every*
 schedule are those of the pose graph with tiles ignored: every walking action whose collision
-cells stay inside the grid and off obstacles (DESIGN §3 rule 2 without a load). A real step of a
+cells stay inside the grid and off obstacles (docs/rules.md, rule 2 without a load). A real step of a
 robot is a step of this graph (rules 1 and 4 only remove steps), and a pick or place leaves the
 pose unchanged, so the number of steps between two poses of any schedule is at least their
 distance here. Bounds (``bille.solvers.bounds``) and the encodings' pruning read these tables.

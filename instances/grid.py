@@ -1,4 +1,4 @@
-"""The grid world: cells, headings, obstacles and tiles (DESIGN §3, "Grid").
+"""The grid world: cells, headings, obstacles and tiles (docs/rules.md, "Grid").
 
 A ``W x H`` grid; cell ``(x, y)`` has the dense index ``c = y * W + x`` (``x`` column, ``y`` row,
 origin top-left, ``y`` grows downward). Every hot structure works on these indices and on flat

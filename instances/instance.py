@@ -1,4 +1,4 @@
-"""Instances: the problem a schedule solves, and the instance file (DESIGN §3 "Instance validity",
+"""Instances: the problem a schedule solves, and the instance file (docs/rules.md, "Valid instances",
 §4 "Instance").
 
 An instance is a start grid (obstacles, tiles), an optional goal grid (omitted: the start's tiles,
@@ -71,7 +71,7 @@ class Instance:
     robot_goals: tuple[XY | None, ...] | None = None
     tasks: tuple[Task, ...] | None = None
     meta: dict[str, Any] | None = field(default=None, hash=False)
-    collisions: str = "bille"  # or "classic" (DESIGN §3 "Classic collisions", point robots only)
+    collisions: str = "bille"  # or "classic" (docs/rules.md, "Classic collisions", point robots only)
 
     # ---- derived --------------------------------------------------------------------------
 
@@ -133,7 +133,7 @@ class Instance:
 
 
 # ---------------------------------------------------------------------------------------------
-# instance validity (DESIGN §3)
+# instance validity (docs/rules.md)
 
 
 def check_instance(inst: Instance, src: Source | None = None) -> Instance:

@@ -1,4 +1,4 @@
-"""Schedule metrics (DESIGN §3, "Metrics").
+"""Schedule metrics (docs/rules.md, "Metrics").
 
 *Makespan*: number of steps, trailing all-``wait`` steps dropped. *Tiles traveled*: number of
 motion actions (everything but wait, pick and place) over all robots. *Waits*, *picks*, *places*:

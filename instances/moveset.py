@@ -1,4 +1,4 @@
-"""Movesets as data (DESIGN §3, "Motions"; paper, Fig. Neighbors: S5 and S7).
+"""Movesets as data (docs/rules.md, "Motions"; paper, Fig. Neighbors: S5 and S7).
 
 A moveset is a footprint (``biped``: Bill-E's two feet; ``point``: one cell, the paper's
 complexity model) and a list of actions written in the robot's local frame. For ``biped`` the

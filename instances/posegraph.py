@@ -1,4 +1,4 @@
-"""The compiled pose graph: moveset x grid -> integer poses and numpy tables (DESIGN §6).
+"""The compiled pose graph: moveset x grid -> integer poses and numpy tables (docs/decisions.md).
 
 Compiled once per (moveset, grid size, obstacles); the rules, the validator, the planners and the
 encodings all read these tables, so motions are derived in exactly one place (``_world``).

@@ -1,4 +1,4 @@
-"""What every solver returns (DESIGN §5)."""
+"""What every solver returns (docs/decisions.md, "The solve() contract")."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -14,7 +14,8 @@ STATUSES = ("optimal", "feasible", "infeasible", "timeout", "unsolved", "interru
 class Result:
     """A solver's answer.
 
-    ``status`` (DESIGN §5): ``optimal`` (schedule with proof of its objective: the makespan,
+    ``status`` (docs/decisions.md, "The solve() contract"):
+    ``optimal`` (schedule with proof of its objective: the makespan,
     unless ``stats["objective"]`` names another), ``feasible`` (schedule, no proof),
     ``infeasible`` (proof that no schedule exists at all), ``timeout`` (the time limit ended the
     run, no schedule), ``unsolved`` (the method gave up before its time limit, no schedule, never

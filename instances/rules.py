@@ -1,4 +1,4 @@
-"""The canonical rules of one time step (DESIGN §3, "One time step" and "Goal").
+"""The canonical rules of one time step (docs/rules.md, "One time step" and "Goal").
 
 All robots act at once. Robot ``i``'s collision set ``C_i`` is its feet before and after, its
 swept cells, its carried-tile cells (when it carries a tile) and a pick/place target. A joint
@@ -28,7 +28,7 @@ from .moveset import Kind
 from .posegraph import PoseGraph
 
 RULES = ("precondition", "workspace", "collision", "support", "connectivity", "goal")
-COLLISIONS = ("bille", "classic")  # rule 3, or DESIGN §3 "Classic collisions" (point robots)
+COLLISIONS = ("bille", "classic")  # rule 3, or docs/rules.md, "Classic collisions" (point robots)
 PICK, PLACE = int(Kind.PICK), int(Kind.PLACE)
 
 
@@ -81,7 +81,7 @@ class World:
     height: int
     obstacles: np.ndarray
     graphs: tuple[PoseGraph, ...]
-    classic: bool = False  # DESIGN §3 "Classic collisions" instead of rule 3 (point robots)
+    classic: bool = False  # docs/rules.md, "Classic collisions" instead of rule 3 (point robots)
     groups: tuple[tuple[PoseGraph, np.ndarray], ...] = field(init=False)
 
     def __post_init__(self) -> None:

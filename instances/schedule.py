@@ -1,4 +1,4 @@
-"""Schedules and the schedule file (DESIGN §4, "Schedule").
+"""Schedules and the schedule file (docs/files.md, "Schedule").
 
 A schedule is one list of action names per robot, all of one length; step ``t`` (1-based) is the
 joint action made of every robot's ``t``-th action. Names are bound to action ids of each robot's

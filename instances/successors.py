@@ -1,5 +1,5 @@
 """The joint actions of a state: each robot's own candidate actions and their combinations whose
-collision sets are disjoint (DESIGN §3, "One time step").
+collision sets are disjoint (docs/rules.md, "One time step").
 
 Shared by the searches over whole states (tiles, poses, loads): the brute-force reference
 search and LaCAM* over whole states. Both filters only save work: every joint action they yield

@@ -1,4 +1,4 @@
-"""Writing instance files (DESIGN §4 "Instance"): the canonical YAML text of an instance."""
+"""Writing instance files (docs/files.md, "Instance"): the canonical YAML text of an instance."""
 from __future__ import annotations
 
 import json

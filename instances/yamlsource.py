@@ -1,6 +1,6 @@
 """Reading YAML while remembering where every value came from.
 
-Errors in user files must name the file, the line and the field (DESIGN §4), so files are read
+Errors in user files must name the file, the line and the field (docs/files.md), so files are read
 into plain Python data plus a :class:`Source` that maps each field path, e.g.
 ``("robots", 1, "front")``, to its line. The small ``expect_*`` helpers check types and raise
 the caller's error class with that location.

@@ -1,4 +1,5 @@
-"""``auto``: the method picked by the instance, the default of ``bille solve`` (DESIGN §5).
+"""``auto``: the method picked by the instance, the default of ``bille solve``
+(docs/decisions.md, "The solve() contract").
 
 On a small joint state space the brute force (:mod:`.bfs`) gives the optimum with its proof,
 where the time-expanded model may find nothing (tiny crowded maps with long schedules: a 3x3 map

@@ -131,7 +131,7 @@ ABOUT = {  # method -> (what it plans for, what it proves); `bille methods` and 
     "bfs": ("least makespan by breadth-first search over joint states (tiny instances)", "optimal makespan"),
 }
 
-CLASSIC = ("auto", "astar", "cbs", "lacam", "bfs")  # the methods that plan under classic collisions (DESIGN §3)
+CLASSIC = ("auto", "astar", "cbs", "lacam", "bfs")  # the methods that plan under classic collisions (docs/rules.md)
 
 class Registry(MutableMapping):
     """Method name -> planning function, each imported from ``"module:function"`` when it is

@@ -1,4 +1,4 @@
-"""The validator: the paper's NP certificate check (Observation 1), under DESIGN §3.
+"""The validator: the paper's NP certificate check (Observation 1), under docs/rules.md.
 
 ``validate(instance, schedule)`` replays the schedule step by step with the rules of
 :mod:`bille.instances.rules` and reports the first violation, or the metrics.

@@ -1,4 +1,4 @@
-"""An independent, slow model of the rules of DESIGN §3, written from the rule book's table.
+"""An independent, slow model of the rules of docs/rules.md, written from the rule book's table.
 
 It shares no code with bille's pose graph or rules: coordinates are tuples, sets are Python
 sets, connectivity is a plain BFS. The tests compare bille's validator against it.
@@ -11,7 +11,7 @@ HEADING = {"N": (0, -1), "E": (1, 0), "S": (0, 1), "W": (-1, 0)}
 
 
 def rot(v, h):
-    """Local (heading N) offset to the world frame of heading vector h (DESIGN §3)."""
+    """Local (heading N) offset to the world frame of heading vector h (docs/rules.md)."""
     x, y = v
     return {(0, -1): (x, y), (1, 0): (-y, x), (0, 1): (-x, -y), (-1, 0): (y, -x)}[h]
 

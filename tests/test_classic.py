@@ -1,4 +1,4 @@
-"""Classic collisions (DESIGN §3): point robots may follow; vertex and swap conflicts and shared
+"""Classic collisions (docs/rules.md): point robots may follow; vertex and swap conflicts and shared
 pick or place targets are rejected; the planners that support the mode agree with brute force."""
 import pytest
 

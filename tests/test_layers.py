@@ -1,4 +1,4 @@
-"""The layers of DESIGN §2, one way with no exceptions, and modules small enough to read.
+"""The layers of docs/decisions.md, "Layers and proofs", one way with no exceptions, and modules small enough to read.
 
 ``instances`` imports nothing of ours; ``heuristics`` and ``encodings`` import only
 ``instances``; ``solvers`` imports ``instances``, ``heuristics`` and ``encodings``; ``tools``

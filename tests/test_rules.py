@@ -1,4 +1,4 @@
-"""Every rule of DESIGN §3: a correct case accepted, a broken one rejected with the right step,
+"""Every rule of docs/rules.md: a correct case accepted, a broken one rejected with the right step,
 rule, robot and cells."""
 import numpy as np
 import pytest

@@ -1,4 +1,5 @@
-"""The contract of ``solve()`` and ``bille solve`` (DESIGN §5): the time limit covers the whole
+"""The contract of ``solve()`` and ``bille solve`` (docs/decisions.md, "The solve() contract"):
+the time limit covers the whole
 call, the static bound is computed only where it is used or asked for, a schedule is validated
 and named once, Ctrl-C ends with status ``interrupted`` and exit 130, progress from the start."""
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Commands that do not solve start fast: they import no solver library (DESIGN §5).
+"""Commands that do not solve start fast: they import no solver library (docs/decisions.md, "The solve() contract").
 
 The commands run one after another in one fresh interpreter, which records after each the
 modules it has loaded by then (so a heavy import is blamed on the first command that made it).

@@ -1,6 +1,7 @@
 """The ``bille`` command line: load -> (solve) -> validate -> save -> print, each a library call.
 
-Exit codes (DESIGN §5): 0 success, 1 a negative answer (invalid schedule, invalid instance shown,
+Exit codes (docs/decisions.md, "The solve() contract"):
+0 success, 1 a negative answer (invalid schedule, invalid instance shown,
 infeasible, timeout without schedule), 2 bad input or usage. A user error is one line on stderr.
 """
 from __future__ import annotations

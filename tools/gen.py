@@ -96,7 +96,7 @@ def gen_corridor(length, robots, room, moved, moveset, seed, output, as_json) ->
 @click.argument("scen", required=False)
 @click.option("--agents", "-k", type=int, required=True, help="Number of robots.")
 @click.option("--collisions", type=click.Choice(["classic", "bille"]), default="classic", show_default=True,
-              help="Classic MAPF collisions (following allowed) or the Bill-E rule (DESIGN §3).")
+              help="Classic MAPF collisions (following allowed) or the Bill-E rule (docs/rules.md).")
 @common
 def gen_movingai(map_file, scen, agents, collisions, seed, output, as_json) -> int:
     """A MovingAI .map (+ .scen) as point robots on an all-tile structure."""

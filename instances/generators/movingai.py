@@ -4,7 +4,7 @@ A ``.map`` file (``type octile``, ``height H``, ``width W``, ``map``, then H row
 whose passable cells (``.``, ``G``, ``S``) are tiles and whose other cells (``@``, ``O``, ``T``,
 ``W``) are obstacles; only the largest 4-connected part of the passable cells stays tiles (the
 structure must be connected), the rest become empty cells. Robots use the ``point`` footprint,
-so the instance is classic MAPF on a 4-connected grid (``collisions: classic``, DESIGN §3, unless
+so the instance is classic MAPF on a 4-connected grid (``collisions: classic``, docs/rules.md, unless
 asked for the Bill-E rule). Agents come from a ``.scen`` file (its
 rows in order, skipping those whose start or goal is outside the kept part or already used) or,
 without one, are drawn at random with the seed.

@@ -2,7 +2,7 @@
 lacam``).
 
 MAPF: each map with its ``random-1`` scenario, the first ``k`` agents for growing ``k``, under
-classic collisions (DESIGN §3), solved by ``lacam``: success, sum of costs (each agent's last
+classic collisions (docs/rules.md), solved by ``lacam``: success, sum of costs (each agent's last
 arrival at its goal), makespan and time. The baseline of the same run is the sum of the agents'
 shortest-path lengths, a lower bound on the sum of costs: the ratio says how far above it the
 schedule is.
