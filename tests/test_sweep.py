@@ -419,3 +419,13 @@ def test_the_load_transfer_experiment_on_random_instances_certifies_by_cpsat(mon
     row = lines[-1].replace("|", " ").split()  # moved, robots, solved off, on, mean steps off, on, optimal, gaps, tasks
     assert row[:4] == ["1", "1", "1/1", "1/1"] and row[6] == "1", lines[-1]
     assert float(row[7]) >= 0 and float(row[8]) >= 0  # no schedule shorter than the optimum
+
+
+def test_a_finished_sweep_run_again_says_none_was_run(cli, capsys, tmp_path):
+    spec = tmp_path / "tiny.yaml"
+    spec.write_text("name: tiny\ninstances: [crowded-2]\nmethods: {bfs: {}}\ntime_limit: 20\n")
+    out = tmp_path / "results"
+    assert cli(["sweep", spec, "--out", out, "--jobs", "1"]) == 0
+    assert "(1 run now;" in capsys.readouterr().out
+    assert cli(["sweep", spec, "--out", out, "--jobs", "1"]) == 0
+    assert "none run again: every run was recorded before" in capsys.readouterr().out

@@ -211,6 +211,7 @@ def gap(instances, methods: tuple[str, ...], schedule_files, time_limit: float, 
             click.echo(line)
         click.echo(f"written to {csv_path}" + (f" and {rrd}" if rrd else ""))
     if interrupted:
-        click.echo(f"bille gap: interrupted; the {len(rows)} rows so far are shown and written", err=True)
+        shown = "the row so far is" if len(rows) == 1 else f"the {len(rows)} rows so far are"
+        click.echo(f"bille gap: interrupted; {shown} shown and written", err=True)
         return EXIT_INTERRUPTED
     return EXIT_OK

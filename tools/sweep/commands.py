@@ -37,15 +37,21 @@ def sweep() -> None:
 def run_sweep(spec_file: str, out: str | None, jobs: int | None, scheduler: str | None) -> int:
     from .spec import load_spec
 
+    from .results import Store
+
     spec = load_spec(spec_file)
     folder = Path(out or f"sweep-{spec.name}")
+    before = sum(r.key in Store(folder).keys for r in spec.runs) if folder.is_dir() else 0
     try:
         _, rows = run_spec(spec, folder, jobs=jobs, scheduler=scheduler)
     except Interrupted as stop:
         click.echo(f"{spec.name}: interrupted; {len(stop.rows)} of {len(spec.runs)} runs recorded in {folder} "
                    f"(results.parquet, results.csv, schedules/); the same command goes on from there")
         return EXIT_INTERRUPTED
-    click.echo(f"{spec.name}: {len(rows)} runs recorded in {folder} (results.parquet, results.csv, schedules/)")
+    again = "none run again: every run was recorded before" if before == len(spec.runs) else \
+        f"{len(spec.runs) - before} run now" + (f", {before} recorded before" if before else "")
+    click.echo(f"{spec.name}: {len(rows)} runs recorded in {folder} ({again}; results.parquet, results.csv, "
+               "schedules/)")
     return EXIT_OK
 
 

@@ -37,8 +37,9 @@ def summary(rows: list[dict]) -> list[str]:
                      f"{100.0 * len(ok) / len(applies):.0f}%" if applies else None, failed,
                      f"{statistics.median(gaps):.1f}%" if gaps else None, f"{max(gaps):.1f}%" if gaps else None,
                      f"{statistics.median(times):.3f}" if times else None])
-    right = {"runs", "n/a", "success", "failed", "median gap", "worst gap", "median time [s]"}
-    out = text_table(["method", "runs", "n/a", "success", "failed", "median gap", "worst gap", "median time [s]"],
+    right = {"runs", "n/a", "success", "failed", "median certified gap", "worst certified gap", "median time [s]"}
+    out = text_table(["method", "runs", "n/a", "success", "failed", "median certified gap", "worst certified gap",
+                      "median time [s]"],
                      body, right=right)
     reasons = why(rows)
     if reasons:
