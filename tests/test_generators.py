@@ -168,3 +168,13 @@ def test_bad_generator_input_is_one_line_and_exit_2(tmp_path, capsys, argv, mess
     assert _run([a.replace("{tmp}", str(tmp_path)) for a in argv]) == 2
     err = capsys.readouterr().err
     assert message in err and len(err.strip().splitlines()) == 1
+
+
+def test_gen_json_names_the_file_written_or_none(cli, capsys, tmp_path):
+    import json
+
+    assert cli(["gen", "graph", "--vertices", "5", "--json"]) == 0
+    said = json.loads(capsys.readouterr().out)
+    assert said["written_to"] is None and "path" not in said
+    assert cli(["gen", "random", "--json", "-o", tmp_path / "r.yaml"]) == 0
+    assert json.loads(capsys.readouterr().out)["written_to"] == str(tmp_path / "r.yaml")

@@ -25,9 +25,10 @@ def _output(inst, output: str | None, as_json: bool) -> int:
 
 
 def summary(inst, path: str | None = None) -> dict:
-    """The instance's sizes, as ``--json`` prints them."""
+    """The instance's sizes, as ``--json`` prints them; ``written_to``: the file written (None
+    when the instance was printed)."""
     moved = int((inst.start.tiles != inst.goal_tiles).sum()) // 2
-    return {"name": inst.name, "path": path, "width": inst.width, "height": inst.height,
+    return {"name": inst.name, "written_to": path, "width": inst.width, "height": inst.height,
             "moveset": inst.moveset.name, "robots": inst.num_robots, "tiles": int(inst.start.tiles.sum()),
             "moved": moved, "tasks": None if inst.tasks is None else len(inst.tasks),
             "kind": "reconfiguration" if inst.is_reconfiguration else "path planning", "meta": inst.meta}
@@ -257,7 +258,7 @@ def gen_graph(graph_file, vertices, seed, output, as_json) -> int:
     if as_json:
         click.echo(json.dumps({"vertices": g.number_of_nodes(), "edges": g.number_of_edges(),
                                "hamiltonian_path": None if path is None else [list(v) for v in path],
-                               "path": output}))
+                               "written_to": output}))
         return EXIT_OK
     click.echo(drawing, nl=False)
     click.echo(f"{g.number_of_nodes()} vertices, {g.number_of_edges()} edges; Hamiltonian path: "
