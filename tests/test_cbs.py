@@ -213,3 +213,41 @@ def bundled_point_moveset() -> str:
     from importlib import resources
 
     return resources.files("bille.instances.movesets").joinpath("point.yaml").read_text()
+
+
+def test_the_robots_a_classic_path_meets_are_all_it_can_conflict_with():
+    """:func:`meeting` (numpy, over a padded matrix of paths) names every robot whose first
+    conflict with robot k exists, and only robots that share a cell or swap with it."""
+    from random import Random
+
+    from bille.heuristics.cbs.classic import matrix, meeting
+    from bille.heuristics.cbs.conflicts import first_conflict
+    from bille.heuristics.cbs.lowlevel import Agent, Path
+
+    rnd = Random(3)
+    for _ in range(300):
+        m, W = rnd.randint(2, 9), 4
+        paths = []
+        for _ in range(m):
+            cell, poses = rnd.randrange(W * W), []
+            for _ in range(rnd.randint(1, 7)):
+                poses.append(cell)
+                x, y = cell % W, cell // W
+                x, y = rnd.choice([(x, y), (min(x + 1, W - 1), y), (max(x - 1, 0), y), (x, min(y + 1, W - 1))])
+                cell = y * W + x
+            paths.append(Path(tuple(poses), (-1,) * len(poses), (frozenset(),) * len(poses), len(poses) - 1))
+        agents = [Agent(i, p.poses[0], None, [0] * (W * W), [True] * (W * W), p.poses[-1]) for i, p in enumerate(paths)]
+        cells = matrix(paths, max(p.cost for p in paths) + 1)
+        for k in range(m):
+            met = set(meeting(cells, k))
+            for j in range(m):
+                if j == k:
+                    continue
+                i, jj = min(k, j), max(k, j)
+                found = first_conflict(agents, i, paths[i], jj, paths[jj], True)
+                assert found is None or j in met
+                if j in met:  # a shared cell after time 0 or an exchange
+                    rows = [list(cells[k]), list(cells[j])]
+                    assert any(a == b for a, b in zip(rows[0][1:], rows[1][1:])) or any(
+                        rows[0][t] == rows[1][t + 1] and rows[0][t + 1] == rows[1][t] != rows[0][t]
+                        for t in range(len(rows[0]) - 1))

@@ -28,6 +28,7 @@ import heapq
 import itertools
 from dataclasses import dataclass, field
 
+from .classic import ClassicAvoid, matrix, meeting
 from .conflicts import KIND_NAMES, TARGET, branches, first_conflict, forced
 from .constraints import Table
 from .cover import cover
@@ -100,7 +101,10 @@ class Tree:
         return path.cost
 
     def replan(self, k: int, constraints: tuple, paths: list[Path | None]) -> Path | None:
-        avoid = Avoid(paths, k, self.classic, [a.stand for a in self.agents])
+        if self.classic:  # a pose is a cell: one count per cell and time, from numpy
+            avoid = ClassicAvoid(paths, k, len(self.agents[k].dist))
+        else:
+            avoid = Avoid(paths, k, self.classic, [a.stand for a in self.agents])
         return search(self.agents[k], self.table(constraints), avoid, self.classic, poll=self.poll, stats=self.stats)
 
     def mdd(self, k: int, node: Node) -> MDD | None:
@@ -128,12 +132,20 @@ class Tree:
                     return None
         conflicts = {}
         for i in range(m):
-            for j in range(i + 1, m):
-                c = first_conflict(self.agents, i, paths[i], j, paths[j], self.classic)
-                if c is not None:
-                    conflicts[(i, j)] = c
+            for j in self.others(paths, i):
+                if j > i:
+                    c = first_conflict(self.agents, i, paths[i], j, paths[j], self.classic)
+                    if c is not None:
+                        conflicts[(i, j)] = c
         costs = [self.cost(k, p) for k, p in enumerate(paths)]
         return Node(constraints, list(paths), costs, conflicts, self.total(costs))
+
+    def others(self, paths: list[Path], k: int):
+        """The robots whose paths robot ``k``'s may conflict with: under classic collisions
+        those it meets at all (:func:`.classic.meeting`), otherwise every other robot."""
+        if not self.classic or len(paths) < 8:
+            return range(len(paths))
+        return meeting(matrix(paths, max(p.cost for p in paths) + 1), k)
 
     def total(self, costs: list[int]) -> int:
         return sum(costs) if self.soc else max(costs, default=0)
@@ -148,7 +160,7 @@ class Tree:
         costs = list(node.costs)
         costs[k] = self.cost(k, path)
         conflicts = {pair: c for pair, c in node.conflicts.items() if k not in pair}
-        for other in range(len(self.agents)):
+        for other in self.others(paths, k):
             if other != k:
                 i, j = min(k, other), max(k, other)
                 c = first_conflict(self.agents, i, paths[i], j, paths[j], self.classic)
