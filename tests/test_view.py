@@ -311,3 +311,23 @@ def test_frames_are_chosen_per_schedule_and_labels_kept(tmp_path):
     assert code == 0 and out.exists()
     assert "/no_transfer/events" in read(tmp_path / "two.rrd")  # entity paths are made valid, labels are not
     assert trace(load_instance(bundled_path("corridor-2")), None, "no transfer").label == "no transfer"
+
+
+def test_the_legend_marks_picks_only_when_a_drawn_frame_shows_one():
+    from bille.instances.generators.coop import demonstration, gadget
+    from bille.tools.pictures import Painter, _manipulations
+
+    inst = gadget(2)
+    tr = trace(inst, Schedule(demonstration(2)), "split")
+    quiet = [t for t in range(tr.steps + 1) if t not in {step for step, _, _, _ in _manipulations(tr)}]
+    some_pick = next(step for step, _, kind, _ in _manipulations(tr) if kind == "pick")
+
+    def labels(frames):
+        painter = Painter([tr], 1, 1, 8, frames=[frames])
+        try:
+            return [h.get_label() for h in painter.legend]
+        finally:
+            painter.close()
+
+    assert "picked this step" not in labels(quiet[:3])
+    assert "picked this step" in labels([some_pick])

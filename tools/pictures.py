@@ -103,12 +103,13 @@ def choose_frames(spec: str | None, steps: int) -> list[int]:
 class Painter:
     """A figure of panels that can be redrawn for any (trace, frame) per panel."""
 
-    def __init__(self, traces: Sequence[Trace], rows: int, cols: int, cell: int = 32) -> None:
+    def __init__(self, traces: Sequence[Trace], rows: int, cols: int, cell: int = 32,
+                 frames: Sequence[Sequence[int]] | None = None) -> None:
         if cell < 4:
             raise OptionError(f"--cell: at least 4 pixels per cell, got {cell}")
         inst = traces[0].instance
         self.traces = traces
-        self.legend = self._legend_items(traces)
+        self.legend = self._legend_items(traces, frames)
         probe = Layout(rows, cols, inst.width, inst.height, cell, 1)
         per_row = max(1, probe.size_px[0] // LEGEND_ITEM_PX)
         self.layout = Layout(rows, cols, inst.width, inst.height, cell, math.ceil(len(self.legend) / per_row))
@@ -142,8 +143,10 @@ class Painter:
         ax.tick_params(length=0, labelsize=6, pad=1, colors=(0.45, 0.45, 0.45))
 
     @staticmethod
-    def _legend_items(traces: Sequence[Trace]) -> list:
-        """One entry per kind of thing the picture shows, and none for what it does not."""
+    def _legend_items(traces: Sequence[Trace], frames: Sequence[Sequence[int]] | None = None) -> list:
+        """One entry per kind of thing the picture shows, and none for what it does not
+        (``frames``: the frames drawn of each trace, where not all are; a pick is marked only in
+        the frame of its step)."""
         grey = (0.45, 0.45, 0.45)
         items = [Patch(facecolor=_rgb(style.TILE), label="tile")]
         inst = traces[0].instance
@@ -160,7 +163,9 @@ class Painter:
             items.append(Patch(facecolor=(*grey, 0.3), label="cells swept (its robot's colour)"))
         if any(tr.steps for tr in traces):
             items.append(Line2D([], [], color=grey, alpha=0.6, linewidth=1.5, label="path so far"))
-        kinds = {kind for tr in traces for _, _, kind, _ in _manipulations(tr)}
+        drawn = [None] * len(traces) if frames is None else [set(f) for f in frames]
+        kinds = {kind for tr, shown in zip(traces, drawn) for step, _, kind, _ in _manipulations(tr)
+                 if shown is None or step in shown}
         for kind, text in (("place", "placed this step"), ("pick", "picked this step"),
                            ("hand-over", "hand-over: picked where another placed")):
             if kind in kinds:
@@ -339,7 +344,7 @@ def save_png(traces: Sequence[Trace], path: str | Path, frames: str | None = Non
         for k, f in enumerate(chosen):
             panels.append((row + k // cols, k % cols, tr, f))
         row += math.ceil(len(chosen) / cols)
-    painter = Painter(traces, row, cols, cell)
+    painter = Painter(traces, row, cols, cell, frames=per_trace)
     try:
         used = {(r, c) for r, c, _, _ in panels}
         for r, line in enumerate(painter.axes):
