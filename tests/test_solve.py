@@ -279,3 +279,17 @@ def test_an_interrupt_let_through_keeps_what_the_method_told(monkeypatch):
     assert result.status == "interrupted" and result.schedule.actions == found.schedule.actions
     assert result.metrics == found.metrics and result.lower_bound == lower_bound(inst).lower + 2
     assert told == [Found.ids.shape]  # a callback given to solve() is called too
+
+
+def test_gap_shows_a_bound_from_the_file_as_a_claim_and_never_certifies_with_it(cli, capsys, tmp_path):
+    from bille.instances import dump_instance
+
+    inst = load_instance(bundled_path("crowded-2"))
+    edited = tmp_path / "edited.yaml"
+    edited.write_text(dump_instance(inst) + "meta: {lower_bound: 99}\n")
+    assert cli(["gap", edited, "--methods", "bfs", "--time-limit", "30", "--csv", tmp_path / "g.csv"]) == 0
+    out = capsys.readouterr().out
+    row = next(line for line in out.splitlines() if line.split()[:2] == ["edited", "bfs"]
+               or line.split()[:2] == [inst.name, "bfs"])
+    assert "99" not in row.split("the file")[0]  # neither the LB nor a gap uses it
+    assert "the file's lower_bound 99 is wrong" in out

@@ -4,9 +4,10 @@ instances.
 Every method configuration runs on every instance under the same time limit. Per instance:
 
 - ``lower_bound``: the best lower bound on the makespan proved by anything in the run: each
-  method's own (``solve()`` reports the static bound at least, an exact or anytime search more),
-  and a known optimum or bound in the instance's metadata (``optimum`` or ``lower_bound``; the
-  generators write them where they are proved, e.g. ``bille gen hampath --search``);
+  method's own (``solve()`` reports the static bound at least, an exact or anytime search more).
+  An optimum or bound in the instance's metadata (``optimum`` or ``lower_bound``, as ``bille gen
+  hampath --search`` writes them) is shown in the note as the file's claim, never used as a proof
+  (a file can be edited);
 - ``best``: the shortest valid schedule of the run;
 - per row, ``certified_gap_percent`` = (makespan - lower_bound) / lower_bound: how much longer
   the schedule is than the optimum *at most*, whatever the optimum; and ``gap_percent``, the
@@ -207,24 +208,36 @@ def _certify(inst: Instance, rows: list[dict]) -> None:
               and not r["objective"]}
     if len(proved) > 1:  # two exact methods disagree: a bug, never hide it
         raise BilleError(f"{inst.name}: exact methods disagree on the optimal makespan: {sorted(proved)}")
-    known, _ = known_lower_bound(inst)
     # a row whose own proofs contradicted its schedule (status error) proves nothing
     lowers = [r["own_lower_bound"] for r in rows if r["own_lower_bound"] is not None and r["status"] != "error"]
-    lowers.append(known)
-    lower = max((v for v in lowers if v is not None), default=None)
+    lower = max(lowers, default=None)
     spans = [r["makespan"] for r in rows if r["makespan"] is not None]
     best = min(spans, default=None)
+    claim = _file_claim(inst, best)
     if lower is not None and best is not None and lower > best:
         raise BilleError(f"{inst.name}: a lower bound of {lower} above a valid schedule of {best} steps")
     optimum = proved.pop() if proved else (best if best is not None and best == lower else None)
     for r in rows:
         r["lower_bound"], r["best"] = lower, best
+        if claim:
+            r["note"] = f"{r['note']}; {claim}" if r["note"] else claim
         if r["makespan"] is None:
             continue
         if optimum is not None:
             r["gap_percent"] = _percent(r["makespan"], optimum)
         if lower is not None:
             r["certified_gap_percent"] = _percent(r["makespan"], lower)
+
+
+def _file_claim(inst: Instance, best: int | None) -> str:
+    """What the instance file says of its optimum, as a claim: shown, not proved here."""
+    known, source = known_lower_bound(inst)
+    if known is None:
+        return ""
+    key = source.removeprefix("metadata ")
+    if best is not None and known > best:
+        return f"the file's {key} {known} is wrong: a valid schedule has {best} steps"
+    return f"the file's {key} {known}, not proved here"
 
 
 def _percent(makespan: int, base: int) -> float:

@@ -150,9 +150,9 @@ def gen_hampath(graph_file, vertices, scale, start, robots, moveset, search, sch
     """Theorem 1's reduction from Hamiltonian path: a vertex gadget per vertex of GRAPH, edge
     tiles between adjacent ones; the bound (s + 7)(|V| - 1) + t_g |V| is in the metadata.
 
-    With --search, the metadata also get the answer: ``optimum`` (a schedule within the bound
-    exists; the shortest is optimal) or ``lower_bound`` (none within the bound: bound + 1), which
-    ``bille gap`` uses as a proved bound."""
+    With --search, the metadata also get the answer: 'optimum' (a schedule within the bound
+    exists; the shortest is optimal) or 'lower_bound' (none within the bound: bound + 1), which
+    'bille gap' shows as the file's claim."""
     from bille.instances.generators.hampath import reduction, search_optimum
 
     if schedule_file and not search:
