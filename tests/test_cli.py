@@ -196,3 +196,11 @@ def test_a_deadlock_says_what_to_try(cli, capsys):
 def test_a_mistyped_bundled_name_gets_a_suggestion(cli, capsys):
     assert cli(["show", "lt4"]) == 2
     assert "lt4: no such file or bundled name; did you mean 'lt-4'?" in capsys.readouterr().err
+
+
+def test_tiles_traveled_say_when_they_were_not_minimized(cli, capsys):
+    assert cli(["solve", "corridor-2", "-m", "cpsat", "-O", "minimize_travel=false"]) == 0
+    assert "tiles traveled 15 (not minimized)" in capsys.readouterr().out
+    assert cli(["solve", "corridor-2", "-m", "cpsat"]) == 0
+    out = capsys.readouterr().out
+    assert "tiles traveled" in out and "not minimized" not in out

@@ -182,7 +182,8 @@ def summary_line(label: str, result) -> str:
     m = result.metrics
     text = f"{label}: {status_text(result)} in {result.time_s:.3f} s"
     if m is not None:
-        text += f"; makespan {m.makespan}, tiles traveled {m.tiles_traveled}, waits {m.waits}"
+        unproved = " (not minimized)" if result.stats.get("tiles_traveled_optimal") is False else ""
+        text += f"; makespan {m.makespan}, tiles traveled {m.tiles_traveled}{unproved}, waits {m.waits}"
     if result.lower_bound is not None:
         text += f"; makespan lower bound {result.lower_bound}"
     elif result.status != "infeasible":
