@@ -94,9 +94,11 @@ def test_a_ctrl_c_at_a_random_moment_ends_the_solve_interrupted(seed):
     inst = load_instance(bundled_path(name))
     sent = []
 
-    def ctrl_c() -> None:
-        sent.append(True)
-        os.kill(os.getpid(), signal.SIGINT)
+    main = threading.main_thread().ident
+
+    def ctrl_c() -> None:  # to the main thread, as the kernel delivers a terminal's SIGINT (os.kill from
+        sent.append(True)  # this thread would land here, where Python never looks at it)
+        signal.pthread_kill(main, signal.SIGINT)
 
     timer = threading.Timer(random.Random(seed).uniform(0.05, 1.5), ctrl_c)
     timer.start()
