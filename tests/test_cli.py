@@ -204,3 +204,10 @@ def test_tiles_traveled_say_when_they_were_not_minimized(cli, capsys):
     assert cli(["solve", "corridor-2", "-m", "cpsat"]) == 0
     out = capsys.readouterr().out
     assert "tiles traveled" in out and "not minimized" not in out
+
+
+def test_every_error_line_starts_the_same_way(cli, capsys):
+    for argv in (["solve", "lt-4", "-m", "foo"], ["slove"], ["show", "no-such-file"], ["solve", "lt-4", "-O", "x"]):
+        assert cli(argv) == 2
+        err = capsys.readouterr().err
+        assert err.startswith("bille: error: ") and len(err.strip().splitlines()) == 1, err

@@ -72,7 +72,9 @@ def main(argv: list[str] | None = None) -> int:
         code = cli.main(args=argv, prog_name="bille", standalone_mode=False)
     except click.exceptions.UsageError as exc:
         cmd = exc.ctx.command_path if exc.ctx else "bille"
-        click.echo(f"{cmd}: {exc.format_message().rstrip('.')} (see '{cmd} --help')", err=True)
+        message = exc.format_message().rstrip(".")
+        message = message[:1].lower() + message[1:]  # one style with every other error line
+        click.echo(f"bille: error: {message} (see '{cmd} --help')", err=True)
         code = EXIT_USAGE
     except click.exceptions.Abort:
         click.echo("bille: interrupted", err=True)
