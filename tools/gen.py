@@ -131,7 +131,7 @@ def _vertex(text: str | None, option: str = "--start"):
 
 
 @gen.command("hampath")
-@click.argument("graph_file", metavar="GRAPH", required=False)
+@click.argument("graph_file", metavar="[GRAPH]", required=False)
 @click.option("--vertices", type=int, help="Use a random connected grid graph of this many vertices instead.")
 @click.option("--scale", "-s", type=click.IntRange(min=1), default=1, show_default=True,
               help="Edge tiles between two gadgets (vertex tiles are s + 7 apart).")
@@ -185,7 +185,7 @@ def gen_hampath(graph_file, vertices, scale, start, robots, moveset, search, sch
 
 
 @gen.command("coop")
-@click.argument("graph_file", metavar="GRAPH", required=False)
+@click.argument("graph_file", metavar="[GRAPH]", required=False)
 @click.option("--vertices", type=int, help="Attach to a random connected grid graph of this many vertices.")
 @click.option("--scale", "-s", type=click.IntRange(min=1), default=1, show_default=True,
               help="Edge tiles between two vertex gadgets (with a graph).")
@@ -239,7 +239,7 @@ def gen_coop(graph_file, vertices, scale, start, end, gap, search, schedule_file
 
 
 @gen.command("graph")
-@click.argument("graph_file", metavar="GRAPH", required=False)
+@click.argument("graph_file", metavar="[GRAPH]", required=False)
 @click.option("--vertices", type=int, help="Generate a random connected grid graph of this many vertices.")
 @click.option("--seed", type=int, default=0, show_default=True)
 @click.option("-o", "--output", type=click.Path(dir_okay=False), help="Write the graph drawing here.")

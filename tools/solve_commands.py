@@ -15,13 +15,15 @@ from .common import (EXIT_INTERRUPTED, EXIT_NO, EXIT_OK, LiveLine, exit_code, in
 @click.command("solve")
 @click.argument("instance")
 @click.option("--method", "-m", type=click.Choice(list(METHODS)), default="auto", show_default=True,
-              help="auto: the brute force with proof on a small joint state space, anytime solving otherwise.")
+              help="auto: the brute force with proof on a small joint state space, cbs on classic MAPF, anytime "
+                   "otherwise. 'bille methods' lists what each method proves.")
 @click.option("--epsilon", type=click.FloatRange(min=1.0), help="Heuristic weight (astar, mstar, temporal-astar).")
 @click.option("--horizon", "-H", type=click.IntRange(min=1), help="Steps planned ahead (temporal-astar).")
-@click.option("--time-limit", type=float, help="Seconds for the whole call, the lower bound included.")
+@click.option("--time-limit", type=float, help="Seconds for the whole call, the lower bound included (default: "
+              "the method's own, see 'bille methods METHOD').")
 @click.option("--threads", type=click.IntRange(min=1), help="Solver workers (cpsat).")
 @click.option("--load-transfer", is_flag=True, default=None,
-              help="Reconfiguration (temporal-astar, mstar): robots exchange loads (paper, equations 1-3).")
+              help="Reconfiguration (temporal-astar, mstar, lacam): robots exchange loads (paper, equations 1-3).")
 @click.option("--d-tr", type=click.IntRange(min=0), help="Manhattan distance within which robots consider a load transfer.")
 @click.option("--bound", is_flag=True,
               help="Also compute the static makespan lower bound where the method does not use it (the heuristics).")

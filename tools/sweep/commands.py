@@ -22,8 +22,15 @@ class _RunByDefault(click.Group):
 
 @click.group(cls=_RunByDefault)
 def sweep() -> None:
-    """Experiments at scale: bille sweep SPEC.yaml runs instances x methods x options (local
-    processes, or a Dask cluster with --scheduler), resumable; bille sweep report RESULTS."""
+    """Experiments at scale: bille sweep SPEC.yaml runs instances x methods x options, resumable;
+    bille sweep report RESULTS reports on them.
+
+    \b
+    bille sweep SPEC.yaml [--jobs N] [--out DIR]        local processes (default: one per CPU)
+    bille sweep SPEC.yaml --scheduler tcp://HOST:PORT   on a Dask cluster
+    bille sweep report RESULTS                          success, certified gaps, times; plots
+
+    The options of each: bille sweep run --help, bille sweep report --help."""
 
 
 @sweep.command("run", help=f"""Run every run of SPEC.yaml (or a sweep shipped with bille: {', '.join(SHIPPED)})
