@@ -211,3 +211,27 @@ def test_every_error_line_starts_the_same_way(cli, capsys):
         assert cli(argv) == 2
         err = capsys.readouterr().err
         assert err.startswith("bille: error: ") and len(err.strip().splitlines()) == 1, err
+
+
+def test_one_letter_means_one_thing_and_no_design_file_is_cited():
+    """-m is the method wherever it appears (gen hampath's robots are -r); the code and docs cite
+    the rules where users read them (docs/), not a design file outside the repository."""
+    import subprocess
+    from pathlib import Path
+
+    import click
+
+    from bille.tools.cli import cli
+
+    stack = [(cli, "bille")]
+    while stack:
+        cmd, path = stack.pop()
+        for p in cmd.params:
+            if "-m" in getattr(p, "opts", []):
+                assert p.name == "method", f"{path}: -m is --{p.name}"
+        if isinstance(cmd, click.Group):
+            sub = click.Context(cmd)
+            stack += [(cmd.get_command(sub, n), f"{path} {n}") for n in cmd.list_commands(sub)]
+    root = Path(__file__).resolve().parents[1]
+    tracked = subprocess.run(["git", "ls-files", "*.py", "*.md"], cwd=root, capture_output=True, text=True).stdout.split()
+    assert not [f for f in tracked if "DESIGN §" in (root / f).read_text(encoding="utf-8") and f != "tests/test_cli.py"]

@@ -133,7 +133,7 @@ def test_gen_hampath_search_prints_the_verdict_and_writes_the_witness(tmp_path, 
     (["gen", "hampath", "{tmp}/l.graph", "--scale", "0"], "0 is not in the range"),
     (["gen", "hampath", "{tmp}/l.graph", "--start", "7,7"], "not a vertex"),
     (["gen", "hampath", "{tmp}/l.graph", "--start", "x"], "expected X,Y"),
-    (["gen", "hampath", "{tmp}/l.graph", "-m", "2", "--search"], "one robot"),
+    (["gen", "hampath", "{tmp}/l.graph", "-r", "2", "--search"], "one robot"),
     (["gen", "hampath", "{tmp}/l.graph", "--schedule", "{tmp}/s.yaml"], "--schedule needs --search"),
 ])
 def test_bad_hampath_input_is_one_line_and_exit_2(tmp_path, rejects, argv, message):

@@ -285,4 +285,5 @@ def _show(v, fmt="{}"):
 
 
 def _short(note: str) -> str:
-    return note if len(note) <= 60 else note[:57] + "..."
+    """The note whole: it is the last column, so a long one only makes its line long."""
+    return note

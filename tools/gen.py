@@ -137,7 +137,7 @@ def _vertex(text: str | None, option: str = "--start"):
               help="Edge tiles between two gadgets (vertex tiles are s + 7 apart).")
 @click.option("--start", metavar="X,Y", help="The graph vertex the robot starts at (default: a vertex of degree 1, "
                                              "else the first).")
-@click.option("--robots", "-m", type=click.IntRange(min=1), default=1, show_default=True,
+@click.option("--robots", "-r", type=click.IntRange(min=1), default=1, show_default=True,
               help="Corollary 1: this many copies, one robot each.")
 @click.option("--moveset", default="point", show_default=True)
 @click.option("--search", is_flag=True, help="Also decide by exhaustive search whether the optimal makespan is the "

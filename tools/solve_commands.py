@@ -21,7 +21,7 @@ from .common import (EXIT_INTERRUPTED, EXIT_NO, EXIT_OK, LiveLine, exit_code, in
 @click.option("--horizon", "-H", type=click.IntRange(min=1), help="Steps planned ahead (temporal-astar).")
 @click.option("--time-limit", type=float, help="Seconds for the whole call, the lower bound included (default: "
               "the method's own, see 'bille methods METHOD').")
-@click.option("--threads", type=click.IntRange(min=1), help="Solver workers (cpsat).")
+@click.option("--threads", type=click.IntRange(min=1), help="CP-SAT workers (cpsat; default 1: repeatable results).")
 @click.option("--load-transfer", is_flag=True, default=None,
               help="Reconfiguration (temporal-astar, mstar, lacam): robots exchange loads (paper, equations 1-3).")
 @click.option("--d-tr", type=click.IntRange(min=0), help="Manhattan distance within which robots consider a load transfer.")
@@ -156,7 +156,8 @@ def _explain(inst, key: str, value) -> str:
               help="Also a schedule file as a row, on every instance with its number of robots (repeatable).")
 @click.option("--time-limit", type=click.FloatRange(min=0, min_open=True), default=60.0, show_default=True,
               help="Seconds per method and instance.")
-@click.option("--threads", type=click.IntRange(min=1), default=2, show_default=True, help="CP-SAT workers.")
+@click.option("--threads", type=click.IntRange(min=1), default=1, show_default=True,
+              help="CP-SAT workers (cpsat rows; 1: repeatable results).")
 @click.option("--csv", "csv_path", type=click.Path(dir_okay=False), default="gap.csv", show_default=True,
               help="Where to write the table as CSV.")
 @click.option("--rerun", "rrd", type=click.Path(dir_okay=False), metavar="OUT.rrd",

@@ -181,7 +181,7 @@ def bench_exact(time_limit: float, threads: int, only) -> int:
 @bench.command("hampath")
 @click.option("--size", type=click.IntRange(2, 40), default=10, show_default=True, help="Largest grid graph side.")
 @click.option("--scale", "-s", type=click.IntRange(min=1), default=1, show_default=True)
-@click.option("--robots", "-m", type=click.IntRange(min=1), default=1, show_default=True)
+@click.option("--robots", "-r", type=click.IntRange(min=1), default=1, show_default=True)
 def bench_hampath(size: int, scale: int, robots: int) -> int:
     """Time and size of Theorem 1's instance for k x k grid graphs up to SIZE."""
     from .gen import report
