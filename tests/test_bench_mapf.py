@@ -115,3 +115,21 @@ def test_bench_scale_goals_leave_room_for_every_robot(seed):
     inst = scale_instance(16, 50, 0.2, seed)  # a robot per four free cells
     assert sum(g is not None for g in inst.robot_goals) == 50
     assert goals_all_standable(inst)
+
+
+def test_bench_mapf_optimal_compares_the_exact_methods_with_a_table_and_csv(capsys, tmp_path):
+    import csv
+
+    out = tmp_path / "opt.csv"
+    code, text, err = run(capsys, "bench", "mapf", "--optimal", "--names", "room-32-32-4", "--agents", "3",
+                          "--time-limit", "5", "--csv", str(out))
+    assert code == 0, err
+    rows = list(csv.DictReader(out.open()))
+    by = {r["method"]: r for r in rows}
+    assert set(by) == {"cbs", "basic CBS", "joint A*"}
+    assert by["cbs"]["status"] == "optimal" and by["cbs"]["sum_of_costs"] == by["basic CBS"]["sum_of_costs"]
+    inst = from_movingai(shipped_maps() / "room-32-32-4.map", shipped_maps() / f"room-32-32-4{SCENARIO}", agents=3)
+    result = solve(inst, "cbs")
+    assert validate(inst, result.schedule).valid and str(result.stats["sum_of_costs"]) == by["cbs"]["sum_of_costs"]
+    if by["joint A*"]["status"] == "optimal":
+        assert by["joint A*"]["sum_of_costs"] == by["cbs"]["sum_of_costs"]

@@ -269,8 +269,10 @@ def bench_crowd(size: int, robots: int, horizon: int, seed: int) -> int:
                    "repositories: print bille's time and sum of costs against theirs.")
 @click.option("--optimal", is_flag=True, help="The exact methods instead: cbs, basic CBS (the baseline) and joint "
               "A*, optimal sum of costs with proof (default --agents 10,20,30,40).")
+@click.option("--csv", "csv_path", type=click.Path(dir_okay=False), default="mapf-optimal.csv", show_default=True,
+              help="With --optimal: where to write the table as CSV.")
 def bench_mapf(folder: str | None, names: str | None, agents: str, time_limit: float, improve: float,
-               peers: str | None, optimal: bool) -> int:
+               peers: str | None, optimal: bool, csv_path: str) -> int:
     """Classic MAPF on MovingAI maps: LaCAM*'s success, sum of costs, makespan and time; with
     --optimal, the exact methods' proofs and times."""
     from pathlib import Path
@@ -292,7 +294,7 @@ def bench_mapf(folder: str | None, names: str | None, agents: str, time_limit: f
         raise click.BadParameter(f"{', '.join(missing) or 'no map'}: expected NAME.map and NAME-random-1.scen in "
                                  f"{where} (found: {', '.join(found) or 'none'})", param_hint="--names")
     if optimal:
-        return _optimal(where, chosen, counts, time_limit)
+        return _optimal(where, chosen, counts, time_limit, csv_path)
     found_peers = available(Path(peers)) if peers else {}
     if peers and not found_peers:
         raise click.BadParameter(f"{peers}: neither lacam3/build/main nor pypibt/pypibt/ in it", param_hint="--peers")
@@ -305,8 +307,10 @@ def bench_mapf(folder: str | None, names: str | None, agents: str, time_limit: f
     return EXIT_OK
 
 
-def _optimal(where, chosen, counts, time_limit: float) -> int:
-    from .optimal import optimal_rows, optimal_table
+def _optimal(where, chosen, counts, time_limit: float, csv_path: str) -> int:
+    from pathlib import Path
+
+    from .optimal import optimal_rows, optimal_table, write_optimal_csv
 
     rows = []
     for row in optimal_rows(where, chosen, counts, time_limit):
@@ -315,6 +319,9 @@ def _optimal(where, chosen, counts, time_limit: float) -> int:
         click.echo(f"{row['map']} {row['agents']} agents: {told}", err=True)
     for line in optimal_table(rows):
         click.echo(line)
+    out = Path(csv_path)
+    write_optimal_csv(rows, out)
+    click.echo(f"written to {out}")
     return EXIT_OK
 
 

@@ -71,6 +71,23 @@ def optimal_table(rows: list[dict]) -> list[str]:
     return text_table(columns, lines, right=set(columns[1:]))
 
 
+def write_optimal_csv(rows: list[dict], path: Path) -> None:
+    """The rows of :func:`optimal_rows` as CSV, one line per map, agent count and method."""
+    import csv
+    import io
+
+    from bille.instances import BilleError
+    from bille.instances.files import write_atomic
+
+    buffer = io.StringIO()
+    out = csv.writer(buffer)
+    out.writerow(["map", "agents", "method", "status", "sum_of_costs", "time_s"])
+    for r in rows:
+        for label, run in r["runs"].items():
+            out.writerow([r["map"], r["agents"], label, run["status"], run["soc"], round(run["time_s"], 4)])
+    write_atomic(path, buffer.getvalue(), BilleError)
+
+
 def peer_rows(binary: Path, files: list[Path], time_limit: float):
     """One row per libMultiRobotPlanning instance: its CBS and bille's, one after the other."""
     for path in files:
