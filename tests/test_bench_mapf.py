@@ -124,7 +124,7 @@ def test_bench_mapf_optimal_compares_the_exact_methods_with_a_table_and_csv(caps
     code, text, err = run(capsys, "bench", "mapf", "--optimal", "--names", "room-32-32-4", "--agents", "3",
                           "--time-limit", "5", "--csv", str(out))
     assert code == 0, err
-    rows = list(csv.DictReader(out.open()))
+    rows = list(csv.DictReader(out.read_text().splitlines()))
     by = {r["method"]: r for r in rows}
     assert set(by) == {"cbs", "basic CBS", "joint A*"}
     assert by["cbs"]["status"] == "optimal" and by["cbs"]["sum_of_costs"] == by["basic CBS"]["sum_of_costs"]
