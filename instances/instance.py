@@ -150,9 +150,10 @@ def check_instance(inst: Instance, src: Source | None = None) -> Instance:
     if not np.array_equal(goal.obstacles, start.obstacles):
         x, y = start.xy(int(np.flatnonzero(goal.obstacles != start.obstacles)[0]))
         raise src.fail(("goal",), f"obstacles differ from the start grid's at ({x}, {y})")
+    mapf = inst.collisions == "classic" and np.array_equal(goal.tiles, start.tiles)
     for key, grid in (("grid", start), ("goal", goal)):
         # a MAPF map's free cells may fall into parts (docs/decisions.md, "Classic collisions")
-        if inst.collisions != "classic" and not is_connected(grid.tiles, w, h):
+        if not mapf and not is_connected(grid.tiles, w, h):
             _disconnected(grid, "start" if key == "grid" else "goal", src, key)
 
     if inst.collisions not in COLLISIONS:

@@ -237,7 +237,7 @@ def schedule_from_mrp(inst: Instance, data: dict, src: Source | str | None = Non
         raise src.fail(("schedule",), "expected a mapping of agent names to paths")
     names = agent_names(inst)
     by_index = [f"agent{i}" for i in range(len(names))]
-    keyed_by_index = names != by_index and set(plans) == set(by_index)
+    keyed_by_index = names != by_index and set(plans) == set(by_index) and set(plans) != set(names)
     if keyed_by_index:  # libMultiRobotPlanning's cbs names agents by their place in the file
         plans = {names[int(key[5:])]: path for key, path in plans.items()}
     for key in plans:

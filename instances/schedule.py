@@ -56,15 +56,18 @@ class Schedule:
 
 def identity(instance: Instance) -> dict[str, str]:
     """What a schedule records of the instance it was made for: its name and the SHA-256 of its
-    canonical text (:func:`~.writing.dump_instance`: the same for the same instance whatever its
-    file's comments or layout). Computed once per instance."""
+    canonical text (:func:`~.writing.dump_instance`) without the name and the metadata: the same
+    for the same problem whatever its file's name, comments, layout or notes. Computed once per
+    instance."""
     found = _IDENTITIES.get(id(instance))
     if found is None or found[0] is not instance:
+        import dataclasses
         import hashlib
 
         from .writing import dump_instance
 
-        digest = hashlib.sha256(dump_instance(instance).encode()).hexdigest()
+        problem = dataclasses.replace(instance, name="instance", meta=None)
+        digest = hashlib.sha256(dump_instance(problem).encode()).hexdigest()
         if len(_IDENTITIES) > 256:
             _IDENTITIES.clear()
         found = _IDENTITIES[id(instance)] = (instance, {"name": instance.name, "sha256": digest})
@@ -133,6 +136,8 @@ def parse_schedule(data, src: Source) -> Schedule:
         for key in ("name", "sha256"):
             if not isinstance(named[key], str) or not named[key]:
                 raise src.fail(("instance", key), f"expected the instance's {key} as text, got {named[key]!r}")
+        if not all(c in "0123456789abcdef" for c in named["sha256"]):
+            raise src.fail(("instance", "sha256"), f"expected hexadecimal digits, got {named['sha256'][:80]!r}")
         named = {"name": named["name"], "sha256": named["sha256"]}
     robots = expect_list(top["robots"], src, ("robots",), "a list with one list of actions per robot")
     rows = []

@@ -198,7 +198,7 @@ class _Anytime:
             if isinstance(rise, Background):  # the bounds the child proved and sent before it
                 try:
                     rise.step(time.perf_counter())
-                except KeyboardInterrupt:
+                except (KeyboardInterrupt, Exception):  # a message cut by the Ctrl-C: keep what was read
                     pass
         finally:
             if rise is not None:

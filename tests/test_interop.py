@@ -287,3 +287,14 @@ def test_a_libmultirobotplanning_map_in_two_parts_is_kept_as_it_is(tmp_path):
     assert result.stats["sum_of_costs"] == 4
     data["agents"][1]["goal"] = [0, 1]
     assert solve(from_mrp(data, "apart"), "cbs").status == "infeasible"
+
+
+def test_a_schedule_keyed_by_the_instance_names_is_read_by_name_even_when_they_look_like_indices(tmp_path, capsys):
+    (tmp_path / "i.mrp.yaml").write_text(MRP.replace("agent0", "agentX").replace("agent1", "agent0")
+                                         .replace("agentX", "agent1"))
+    (tmp_path / "p.mrp.yaml").write_text(PLAN.replace("agent0", "agentX").replace("agent1", "agent0")
+                                         .replace("agentX", "agent1"))
+    code, out, err = cli(capsys, "convert", tmp_path / "p.mrp.yaml", tmp_path / "p.yaml", "--instance",
+                         tmp_path / "i.mrp.yaml")
+    assert code == 0, err
+    assert "keyed by index" not in out

@@ -55,3 +55,21 @@ def test_an_old_output_file_is_left_and_the_command_says_so(cli, capsys, tmp_pat
     assert f"no schedule: {out} left as it was, not written by this run" in capsys.readouterr().err
     assert out.read_text() == "robots: []\n"
     assert load_schedule(out).instance is None
+
+
+def test_a_renamed_copy_or_new_notes_are_the_same_instance():
+    import dataclasses
+
+    inst = load_instance(bundled_path("compare-2"))
+    schedule = schedule_from_text(dump_schedule(solve(inst, "astar").schedule))
+    renamed = dataclasses.replace(inst, name="mine", meta={"note": "a copy"})
+    assert written_for(renamed, schedule) is None
+
+
+def test_a_malformed_digest_is_one_clear_error():
+    import pytest
+
+    from bille.instances import ScheduleError
+
+    with pytest.raises(ScheduleError, match="sha256: expected hexadecimal digits"):
+        schedule_from_text("instance: {name: x, sha256: 'ab}, x: y'}\nrobots: [[wait]]\n", "s.yaml")

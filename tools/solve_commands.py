@@ -166,8 +166,9 @@ def _explain(inst, key: str, value) -> str:
 def gap(instances, methods: tuple[str, ...], schedule_files, time_limit: float, threads: int, csv_path: str, rrd: str | None,
         as_json: bool) -> int:
     """How far methods are from the optimum: one table over INSTANCES (default: the bundled
-    point-4) with each schedule's makespan, the best lower bound proved in the run (or carried
-    by the instance), and the certified gap (makespan - bound) / bound; then a summary per method.
+    point-4) with each schedule's makespan, the best lower bound proved in the run, and the
+    certified gap (makespan - bound) / bound; then a summary per method. An optimum or bound in
+    the instance's metadata is shown as the file's claim, never used as a proof.
     By default auto (the best schedule with the proof it can get) is the reference, against the
     paper's heuristics. Ctrl-C shows and writes the rows finished (exit 130)."""
     from pathlib import Path
