@@ -184,9 +184,10 @@ def check_tables(instance: Instance, method: str) -> None:
 def require_path_planning(instance: Instance, method: str = "astar") -> None:
     """The walking planners plan on a structure that does not change."""
     if instance.is_reconfiguration:
-        raise OptionError(
-            f"instance '{instance.name}' moves tiles; {method} here plans robot paths on a fixed structure "
-            "(path-planning instances); the methods temporal-astar and mstar run the reconfiguration loop")
+        others = "bfs and auto plan it (classic collisions)" if instance.collisions == "classic" else \
+            "temporal-astar, mstar and lacam run the reconfiguration loop"
+        raise OptionError(f"instance '{instance.name}' moves tiles; {method} plans robot paths on a fixed structure "
+                          f"(path-planning instances); {others}")
 
 
 def schedule_ids(instance: Instance, steps: list[tuple[int, ...]]) -> np.ndarray:

@@ -26,7 +26,7 @@ from .instance import Instance, Robot, check_instance
 from .limits import check_budget, check_size
 from .moveset import load_moveset
 from .rules import run
-from .schedule import Schedule, bind
+from .schedule import Schedule, bind, identity
 from .yamlsource import Source, expect_list, expect_mapping, expect_str, expect_xy
 
 MOVES = {(0, 0): "wait", (0, -1): "north", (1, 0): "east", (0, 1): "south", (-1, 0): "west"}
@@ -283,7 +283,7 @@ def schedule_from_mrp(inst: Instance, data: dict, src: Source | str | None = Non
     if keyed_by_index:
         meta["agents"] = (f"keyed by index (agent0 .. agent{len(names) - 1}), read in the instance's order "
                           f"({', '.join(names[:3])}{' ...' if len(names) > 3 else ''})")
-    return Schedule(tuple(rows), meta=meta)
+    return Schedule(tuple(rows), meta=meta, instance=identity(inst))
 
 
 def mrp_name(path: str | Path) -> bool:

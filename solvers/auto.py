@@ -69,7 +69,11 @@ def plan(instance: Instance, *, time_limit: float = 60.0, bounds=None, progress:
     if instance.collisions == "classic" and not instance.is_reconfiguration:
         return _classic(instance, time_limit)
     size = joint_states(instance)
-    fallback = "lacam" if instance.collisions == "classic" else "anytime"
+    if instance.collisions == "classic":  # a classic reconfiguration: the brute force is the method that moves tiles
+        found = bfs.plan(instance, time_limit=time_limit)
+        return _told(found, {"method": "bfs", "why": "classic collisions with tiles to move: the brute force, the "
+                                                   "method that plans them"})
+    fallback = "anytime"
     if size > SMALL:
         chosen = {"method": fallback, "why": f"about {size:.1e} joint states, more than {SMALL:.0e}"}
         lower = None

@@ -93,3 +93,15 @@ def test_classic_mapf_hands_over_to_lacam_when_cbs_runs_out(monkeypatch):
     result = solve(inst, time_limit=20)
     assert result.stats["auto"]["method"] == "lacam" and result.stats["lower_bound_sum_of_costs"] == 7
     assert result.schedule is not None and validate(inst, result.schedule).valid
+
+
+def test_a_classic_reconfiguration_goes_to_the_brute_force_whatever_its_size(monkeypatch):
+    """lacam plans no tile moves under classic collisions: auto gave an error on a large one."""
+    from helpers import make
+
+    inst = make("TTT.\nTTT.", [{"at": [0, 0]}], moveset="point", collisions="classic",
+                goal="TTTT\nTT..", robot_goals=[[0, 1]])
+    monkeypatch.setattr(auto, "SMALL", 0)  # as large as any
+    result = solve(inst, time_limit=20)
+    assert result.stats["auto"]["method"] == "bfs" and result.status == "optimal"
+    assert validate(inst, result.schedule).valid

@@ -24,16 +24,13 @@ def schedule_arg(arg: str):
     return load_schedule(resolve(arg, ScheduleError))
 
 
-def schedule_for(arg: str, instance, *, strict: bool = False, force: bool = False):
-    """A schedule for ``instance``: where it names another instance, a warning on stderr, or with
-    ``strict`` (unless ``force``) an error."""
+def schedule_for(arg: str, instance):
+    """A schedule for ``instance``: where it names another instance, a warning on stderr."""
     from bille.instances.schedule import written_for
 
     schedule = schedule_arg(arg)
     why = written_for(instance, schedule)
     if why is not None:
-        if strict and not force:
-            raise ScheduleError(f"{why}; --force to go on")
         click.echo(f"warning: {why}", err=True)
     return schedule
 

@@ -211,13 +211,14 @@ def gen_coop(graph_file, vertices, scale, start, end, gap, search, schedule_file
         if schedule_file:
             from pathlib import Path
 
-            from bille.instances.schedule import Schedule, save_schedule
+            from bille.instances.schedule import Schedule, identity, save_schedule
 
             if not output:  # the pair is checked together: the instance goes beside its schedule
                 path = Path(schedule_file)
                 output = str(path.with_name(path.name.split(".")[0] + ".instance.yaml"))
             writable(output, schedule_file)
-            save_schedule(Schedule(demonstration(gap), meta={"method": "demonstration (gen coop)"}), schedule_file)
+            save_schedule(Schedule(demonstration(gap), meta={"method": "demonstration (gen coop)"},
+                                   instance=identity(gadget(gap))), schedule_file)
             click.echo(f"schedule written to {schedule_file}; check it with: bille check {output} {schedule_file}",
                        err=True)
         return _output(gadget(gap), output, as_json)

@@ -130,8 +130,10 @@ def run(instance, schedule, journal_in, replan, broker, bind, robots, secrets_pa
         inst_path, sched_path = resolve(instance, InstanceError), resolve(schedule, ScheduleError)
         inst, sched = load_instance(inst_path), load_schedule(sched_path)
         why = written_for(inst, sched)
-        if why is not None and not force:
-            raise ScheduleError(f"{why}; --force to run it anyway")
+        if why is not None:
+            if not force:
+                raise ScheduleError(f"{why}; --force to run it anyway")
+            click.echo(f"warning: {why}; run as --force asks", err=True)
         path = Path(journal or f"{inst.name}-{datetime.now():%Y%m%d-%H%M%S}.journal.jsonl")
         settings["fleet"] = fleet
         with _Progress(not as_json and sys.stderr.isatty(), sched.length) as bar:
