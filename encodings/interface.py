@@ -24,6 +24,7 @@ import time
 from dataclasses import dataclass, field, replace
 from typing import Callable, Sequence
 
+from bille.instances.interrupts import quiet_thread
 from bille.instances.limits import address_room
 
 from .model import Model
@@ -150,6 +151,7 @@ def interruptible(work: Callable[[], Outcome], interrupt: Callable[[], None], de
     done = threading.Event()
 
     def run() -> None:
+        quiet_thread()  # a Ctrl-C goes to the waiting thread, never to a solver's own handler here
         try:
             box["outcome"] = work()
         except BaseException as error:  # handed to the waiting thread

@@ -6,8 +6,7 @@ could happen now (:meth:`.Manipulation.ready`); otherwise it has no goal for now
 gives way instead of holding a pose others need (a relay tile not dropped yet, a pick that must
 wait for another job). An idle robot is bound for its goal cell if it has one; else, with
 *parking* (the LaCAM* motion layer), for a pose out of the way of the work at hand; else, when
-it stands on a tile that a pending job must pick, or on a cell under every pose from which
-another robot can make its next pick or place, for any pose whose feet are off those cells;
+it stands on a tile that a pending job must pick, for any pose whose feet are off those tiles;
 any other idle robot is free (it only keeps out of the way).
 
 A goal is a distance table over the robot's poses, named by what it means (the robot type, the
@@ -75,32 +74,15 @@ class Goals:
             return self._goal(i, walk, ("front", cell), lambda: walk.distances(cell))
         if self.parking:
             return self._parking(s, i, walk)
-        needed = s.pending_picks() | self._stood_on(s, i)
+        needed = s.pending_picks()
         feet = walk.graph.feet
-        if needed.intersection(feet[s.poses[i]].tolist()):  # off those cells
+        if needed.intersection(feet[s.poses[i]].tolist()):  # off the tiles still to be picked
             def clear():
                 return np.flatnonzero(walk.standing & ~np.isin(feet, list(needed)).any(axis=1))
 
             key = ("clear", frozenset(needed))
-            goal = self._goal(i, walk, key, lambda: walk.distances_to(key, clear))
-            return None if goal.dist[s.poses[i]] >= UNREACHABLE else goal
+            return self._goal(i, walk, key, lambda: walk.distances_to(key, clear))
         return None
-
-    @staticmethod
-    def _stood_on(s: LoopState, i: int) -> set[int]:
-        """The cells that another robot must stand on for its next pick or place: those under
-        every pose facing that leg's cell (an idle robot there holds the work up for good, and
-        the priority rule cannot move it: without a goal it only waits)."""
-        cells: set[int] = set()
-        for j, legs in enumerate(s.legs):
-            if j == i or not legs:
-                continue
-            walk = s.walk(j)
-            facing = walk.facing_poses(legs[0].cell)
-            if len(facing):
-                under = [set(c for c in walk.graph.feet[p].tolist() if c >= 0) for p in facing.tolist()]
-                cells |= set.intersection(*under)
-        return cells
 
     def _goal(self, i: int, walk: Walk, name: tuple, make) -> Goal:
         key = (self._type[i], walk.tiles.tobytes(), walk.carrying, name)

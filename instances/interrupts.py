@@ -1,11 +1,14 @@
 """Ctrl-C held back while C code runs.
 
 A ``KeyboardInterrupt`` that arrives inside a C extension is not always raised as one: python-sat's
-encoders turn it into their own error (``pycard.error: Caught keyboard interrupt``), and some numpy
-paths clear it. Inside :func:`held_back` the interrupt is only recorded, and raised as an ordinary
-``KeyboardInterrupt`` once the block is done, at a point where Python code can unwind and keep what
-the run found. Outside the main thread (where Python delivers no signal) and where a handler other
-than Python's default one is installed, the block runs as it is.
+encoders and solvers install a SIGINT handler of their own and turn it into their own error
+(``pycard.error: Caught keyboard interrupt``), and some numpy paths clear it. Inside
+:func:`held_back` SIGINT is blocked for this thread (so no C handler sees it) and, should it reach
+another thread, only recorded by Python; it is raised as an ordinary ``KeyboardInterrupt`` once the
+block is done, at a point where Python code can unwind and keep what the run found. Outside the
+main thread (where Python delivers no signal) and where a handler other than Python's default one
+is installed, the block runs as it is. Threads that run solvers block SIGINT for good
+(:func:`quiet_thread`), so that a terminal's Ctrl-C always reaches the main thread.
 """
 from __future__ import annotations
 
@@ -14,10 +17,12 @@ import threading
 from contextlib import contextmanager
 from typing import Iterator
 
+_SIGINT = {signal.SIGINT}
+
 
 @contextmanager
 def held_back() -> Iterator[None]:
-    """Run the block with Ctrl-C recorded, not raised; raise it (once) when the block ends.
+    """Run the block with Ctrl-C held, not raised; raise it (once) when the block ends.
 
     >>> with held_back():
     ...     pass
@@ -28,9 +33,20 @@ def held_back() -> Iterator[None]:
         return
     caught: list[int] = []
     signal.signal(signal.SIGINT, lambda signum, frame: caught.append(signum))
+    mask = signal.pthread_sigmask(signal.SIG_BLOCK, _SIGINT)
     try:
         yield
     finally:
-        signal.signal(signal.SIGINT, signal.default_int_handler)
+        try:  # unblocked first: a Ctrl-C that waited is recorded, not raised in the middle of this
+            signal.pthread_sigmask(signal.SIG_SETMASK, mask)
+        finally:
+            signal.signal(signal.SIGINT, signal.default_int_handler)
     if caught:
         raise KeyboardInterrupt
+
+
+def quiet_thread() -> None:
+    """Block SIGINT in the calling thread (not the main one): the kernel then hands a Ctrl-C to
+    the main thread, the one Python raises it in."""
+    if threading.current_thread() is not threading.main_thread():
+        signal.pthread_sigmask(signal.SIG_BLOCK, _SIGINT)

@@ -20,6 +20,7 @@ def test_a_ctrl_c_inside_the_block_is_raised_after_it():
             done.append("the block went on")
     assert done == ["the block went on"]
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    assert signal.SIGINT not in signal.pthread_sigmask(signal.SIG_BLOCK, set())  # not left blocked
 
 
 def test_without_a_ctrl_c_nothing_is_raised_and_the_handler_is_restored():
@@ -52,6 +53,7 @@ def test_the_sat_back_end_builds_its_encodings_with_ctrl_c_held_back(monkeypatch
     with pytest.raises(KeyboardInterrupt):
         cnf.SatBackend(model, solver="minisat22")
     assert groups > 1 and len(calls) == groups
+    assert signal.SIGINT not in signal.pthread_sigmask(signal.SIG_BLOCK, set())  # not left blocked
 
 
 def test_no_numpy_value_meets_an_enum_member():

@@ -434,34 +434,3 @@ def test_where_every_robot_blocks_the_others_fewer_robots_finish():
     report = validate(inst, schedule)
     assert report.valid and report.metrics.makespan == found.makespan
     assert len(_manipulators(inst, schedule)) < inst.num_robots
-
-
-IDLE_IN_THE_WAY = """name: idle-in-the-way
-moveset: S7
-grid: |
-  TTTTTTT
-  TTTTTTT
-  .......
-  .......
-goal: |
-  TTTTTTT
-  TTTT.TT
-  T......
-  .......
-robots:
-  - {front: [4, 0], back: [3, 0]}
-  - {front: [1, 1], back: [0, 1]}
-"""
-
-
-@pytest.mark.parametrize("load_transfer", [False, True])
-def test_an_idle_robot_on_the_only_pose_for_a_place_is_sent_off_it(load_transfer):
-    """Robot 1 has no job and no goal and stands where robot 0 must stand to place its tile at
-    (0, 2). Without a goal it only waited, moving it up in Q changed nothing, and the loop ended in
-    a deadlock; bound off those cells, it steps aside (7 steps without robot 1, 10 with it)."""
-    from bille.instances import instance_from_text
-
-    inst = instance_from_text(IDLE_IN_THE_WAY)
-    result = solve(inst, "temporal-astar", horizon=10, load_transfer=load_transfer, time_limit=60)
-    assert result.status == "feasible", result.stats.get("failure")
-    assert validate(inst, result.schedule).valid
