@@ -1,5 +1,5 @@
-"""Instances: the problem a schedule solves, and the instance file (docs/rules.md, "Valid instances",
-§4 "Instance").
+"""Instances: the problem a schedule solves, and the instance file (docs/rules.md, "Valid instances";
+docs/files.md, "Instance").
 
 An instance is a start grid (obstacles, tiles), an optional goal grid (omitted: the start's tiles,
 a pure path-planning problem), robots with their start poses, an optional front-foot goal cell per
