@@ -282,14 +282,15 @@ def test_an_interrupt_let_through_keeps_what_the_method_told(monkeypatch):
 
 
 def test_gap_shows_a_bound_from_the_file_as_a_claim_and_never_certifies_with_it(cli, capsys, tmp_path):
+    import json
+
     from bille.instances import dump_instance
 
     inst = load_instance(bundled_path("crowded-2"))
     edited = tmp_path / "edited.yaml"
     edited.write_text(dump_instance(inst) + "meta: {lower_bound: 99}\n")
-    assert cli(["gap", edited, "--methods", "bfs", "--time-limit", "30", "--csv", tmp_path / "g.csv"]) == 0
-    out = capsys.readouterr().out
-    row = next(line for line in out.splitlines() if line.split()[:2] == ["edited", "bfs"]
-               or line.split()[:2] == [inst.name, "bfs"])
-    assert "99" not in row.split("the file")[0]  # neither the LB nor a gap uses it
-    assert "the file's lower_bound 99 is wrong" in out
+    assert cli(["gap", edited, "--methods", "bfs", "--time-limit", "30", "--csv", tmp_path / "g.csv", "--json"]) == 0
+    (row,) = json.loads(capsys.readouterr().out)["rows"]
+    assert row["status"] == "optimal" and row["lower_bound"] == row["makespan"] < 99  # the run's own proof
+    assert row["certified_gap_percent"] == 0.0
+    assert "the file's lower_bound 99 is wrong" in row["note"]
