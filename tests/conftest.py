@@ -1,4 +1,5 @@
 import os
+import signal
 
 import pytest
 
@@ -11,6 +12,15 @@ settings.register_profile(
 )
 settings.register_profile("thorough", deadline=None, max_examples=2000, suppress_health_check=[HealthCheck.too_slow])
 settings.load_profile(os.environ.get("BILLE_HYPOTHESIS", "default"))
+
+
+@pytest.fixture(autouse=True)
+def _ctrl_c_as_python_sets_it():
+    """Every test starts with Ctrl-C as Python sets it up (its handler, not blocked), whatever an
+    earlier test did in this process."""
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+    yield
 
 
 @pytest.fixture

@@ -286,6 +286,9 @@ def serve(robot_id: str, url: BrokerURL, secret: bytes, *, fleet: str, faults: F
     def stop(*_):
         robot.running = False
 
-    signal.signal(signal.SIGTERM, stop)
-    signal.signal(signal.SIGINT, stop)
-    robot.serve()
+    before = {sig: signal.signal(sig, stop) for sig in (signal.SIGTERM, signal.SIGINT)}
+    try:
+        robot.serve()
+    finally:  # served in-process (tests, an embedding program): its handlers are given back
+        for sig, handler in before.items():
+            signal.signal(sig, handler)
