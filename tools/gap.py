@@ -251,7 +251,7 @@ def table(rows: list[dict]) -> list[str]:
                                  SHOWN_STATUS.get(r["status"], shown_status(r["status"], r.get("objective"))),
                                  r["makespan"], r["lower_bound"], r["best"], r["tiles_traveled"],
                                  _show(r["time_s"], "{:.3f}"), _show(r["gap_percent"], "{:+.1f}%"),
-                                 _show(r["certified_gap_percent"], "<= {:.1f}%"), _short(r["note"])]
+                                 _show(r["certified_gap_percent"], "<= {:.1f}%"), r["note"]]
                                 for r in rows],
                       right={"makespan", "LB", "best", "tiles", "time [s]", "gap", "certified"})
 
@@ -282,8 +282,3 @@ def write_csv(rows: list[dict], path: Path) -> None:
 
 def _show(v, fmt="{}"):
     return None if v is None else fmt.format(v)
-
-
-def _short(note: str) -> str:
-    """The note whole: it is the last column, so a long one only makes its line long."""
-    return note

@@ -131,8 +131,9 @@ class Tree:
                 if paths[k] is None:
                     return None
         conflicts = {}
+        cells = self._cells(paths)  # one matrix for every robot's look-up
         for i in range(m):
-            for j in self.others(paths, i):
+            for j in self.others(paths, i, cells):
                 if j > i:
                     c = first_conflict(self.agents, i, paths[i], j, paths[j], self.classic)
                     if c is not None:
@@ -140,12 +141,20 @@ class Tree:
         costs = [self.cost(k, p) for k, p in enumerate(paths)]
         return Node(constraints, list(paths), costs, conflicts, self.total(costs))
 
-    def others(self, paths: list[Path], k: int):
+    def others(self, paths: list[Path], k: int, cells=None):
         """The robots whose paths robot ``k``'s may conflict with: under classic collisions
-        those it meets at all (:func:`.classic.meeting`), otherwise every other robot."""
+        those it meets at all (:func:`.classic.meeting`, on ``cells`` if given), otherwise every
+        other robot."""
+        if cells is None:
+            cells = self._cells(paths)
+        return range(len(paths)) if cells is None else meeting(cells, k)
+
+    def _cells(self, paths: list[Path]):
+        """The paths as :func:`.classic.matrix` where :meth:`others` uses it (classic, 8 robots
+        or more), else None."""
         if not self.classic or len(paths) < 8:
-            return range(len(paths))
-        return meeting(matrix(paths, max(p.cost for p in paths) + 1), k)
+            return None
+        return matrix(paths, max(p.cost for p in paths) + 1)
 
     def total(self, costs: list[int]) -> int:
         return sum(costs) if self.soc else max(costs, default=0)
