@@ -25,9 +25,10 @@ from __future__ import annotations
 
 from .constraints import AFTER, CELL, EDGE, RANGE, VERTEX
 from .lowlevel import MDD, Agent, Path
+from .rectangle import RECTANGLE
 
 CELLS, VERTEXC, EDGEC, TARGET = range(4)
-KIND_NAMES = ("cells", "vertex", "edge", "target")
+KIND_NAMES = ("cells", "vertex", "edge", "target", "rectangle")
 
 
 def first_conflict(agents: list[Agent], i: int, pi: Path, j: int, pj: Path, classic: bool):
@@ -75,16 +76,19 @@ def _classic(agents: list[Agent], i: int, pi: Path, j: int, pj: Path, last: int)
 
 
 def branches(conflict) -> tuple[tuple[int, tuple], tuple[int, tuple]]:
-    """The two children of a conflict: ``(robot, constraint)`` each (module docstring)."""
+    """The two children of a conflict: ``(robot, constraints)`` each (module docstring; a
+    rectangle's, :mod:`.rectangle`, carry its two barriers)."""
     kind, i, j, t, where = conflict
     if kind == CELLS:
-        return (i, (CELL, where, t)), (j, (CELL, where, t))
+        return (i, ((CELL, where, t),)), (j, ((CELL, where, t),))
     if kind == VERTEXC:
-        return (i, (VERTEX, where, t)), (j, (VERTEX, where, t))
+        return (i, ((VERTEX, where, t),)), (j, ((VERTEX, where, t),))
     if kind == EDGEC:
         u, v = where
-        return (i, (EDGE, u, v, t)), (j, (EDGE, v, u, t))
-    return (i, (AFTER, t)), (j, (RANGE, where, t))
+        return (i, ((EDGE, u, v, t),)), (j, ((EDGE, v, u, t),))
+    if kind == RECTANGLE:
+        return (i, where[0]), (j, where[1])
+    return (i, ((AFTER, t),)), (j, ((RANGE, where, t),))
 
 
 def forced(agent: Agent, m: MDD | None, conflict, side: int, classic: bool) -> bool:

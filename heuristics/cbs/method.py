@@ -35,6 +35,13 @@ def _check_movesets(instance: Instance) -> None:
                                   "with such movesets)")
 
 
+def _grid_steps(instance: Instance) -> bool:
+    """Whether every robot is a point that moves one cell across or down at a time (rectangle
+    reasoning's grid, :mod:`.rectangle`)."""
+    return all(ms.footprint == "point" and all(abs(a.front[0]) + abs(a.front[1]) == 1 for a in ms.actions
+                                               if a.kind == Kind.MOTION) for ms in instance.movesets)
+
+
 def closed_world(instance: Instance) -> bool:
     """Whether walking schedules are all the schedules that matter: no robot carries a tile and
     no free cell (neither tile nor obstacle) is next to a tile. A tile is set down next to the
@@ -59,7 +66,8 @@ def closed_world(instance: Instance) -> bool:
 
 
 def plan(instance: Instance, *, objective: str = "sum-of-costs", w: float = 1.0, heuristic: str = "wdg",
-         prioritize: bool = True, bypass: bool = True, target: bool = True, time_limit: float | None = 60.0,
+         prioritize: bool = True, bypass: bool = True, target: bool = True, rectangle: bool = True,
+         time_limit: float | None = 60.0,
          max_nodes: int = 1_000_000) -> Result:
     """Conflict-based search on a path-planning instance (module docstring).
 
@@ -69,7 +77,8 @@ def plan(instance: Instance, *, objective: str = "sum-of-costs", w: float = 1.0,
         not broken) or ``makespan`` (the latest arrival).
     w : suboptimality (>= 1): the sum of costs found is at most ``w`` times optimal; 1 is optimal.
     heuristic : ``wdg``, ``cg`` or ``none`` (sum of costs only).
-    prioritize, bypass, target : the improvements of the module docstring.
+    prioritize, bypass, target, rectangle : the improvements of :mod:`.search` (rectangle
+        reasoning applies under classic collisions to robots that move one cell at a time).
     time_limit : seconds; max_nodes : constraint-tree nodes expanded before giving up.
 
     On a map whose free cells are all tiles (no robot carrying) walking schedules are all the
@@ -100,8 +109,9 @@ def plan(instance: Instance, *, objective: str = "sum-of-costs", w: float = 1.0,
     def poll() -> bool:
         return deadline is not None and time.perf_counter() > deadline
 
-    settings = Settings(objective, heuristic, prioritize, bypass, target, w, max_nodes)
-    tree = Tree(agents, instance.collisions == "classic", settings, poll, stats)
+    settings = Settings(objective, heuristic, prioritize, bypass, target, rectangle, w, max_nodes)
+    tree = Tree(agents, instance.collisions == "classic", settings, poll, stats,
+                instance.width if _grid_steps(instance) else None)
     try:
         unreachable = problem.unreachable()
         if unreachable:

@@ -16,6 +16,9 @@ Improvements (each can be switched off, for measurements):
   replaces the parent's paths instead of branching;
 - *target reasoning*: a robot that passes over another's goal after that one arrived is split on
   the arrival time (:mod:`.conflicts`);
+- *rectangle reasoning* (point robots on a 4-connected grid): a vertex conflict of two robots
+  that came straight from their starts at right angles is split on two barriers instead, when
+  that raises at least as many costs (:mod:`.rectangle`);
 - *focal search* with ``w > 1``: among the open nodes of ``g <= w * LB`` (``LB`` the least ``f``),
   the one with the fewest conflicts; the schedule's sum of costs is at most ``w`` times optimal,
   and ``LB`` is reported.
@@ -29,10 +32,11 @@ import itertools
 from dataclasses import dataclass, field
 
 from .classic import ClassicAvoid, matrix, meeting
-from .conflicts import KIND_NAMES, TARGET, branches, first_conflict, forced
+from .conflicts import KIND_NAMES, TARGET, VERTEXC, branches, first_conflict, forced
 from .constraints import Table
 from .cover import cover
 from .lowlevel import MDD, Agent, Avoid, Path, mdd, search
+from .rectangle import rectangle
 
 OBJECTIVES = ("sum-of-costs", "makespan")
 HEURISTICS = ("wdg", "cg", "none")
@@ -68,15 +72,19 @@ class Settings:
     prioritize: bool = True
     bypass: bool = True
     target: bool = True
+    rectangle: bool = True
     w: float = 1.0
     max_nodes: int = 1_000_000
 
 
 class Tree:
-    """One constraint-tree search over ``agents`` (all robots, or a pair for WDG)."""
+    """One constraint-tree search over ``agents`` (all robots, or a pair for WDG); ``width``: the
+    grid's, where rectangle reasoning applies (point robots moving one cell at a time)."""
 
-    def __init__(self, agents: list[Agent], classic: bool, settings: Settings, poll, stats: dict) -> None:
+    def __init__(self, agents: list[Agent], classic: bool, settings: Settings, poll, stats: dict,
+                 width: int | None = None) -> None:
         self.agents, self.classic, self.settings = agents, classic, settings
+        self.width = width if classic and settings.rectangle else None
         self.poll, self.stats = poll, stats
         self.soc = settings.objective == "sum-of-costs"
         self._tables: dict[tuple, Table] = {}
@@ -159,8 +167,8 @@ class Tree:
     def total(self, costs: list[int]) -> int:
         return sum(costs) if self.soc else max(costs, default=0)
 
-    def child(self, node: Node, k: int, constraint: tuple) -> Node | None:
-        constraints = node.constraints[:k] + (node.constraints[k] + (constraint,),) + node.constraints[k + 1:]
+    def child(self, node: Node, k: int, added: tuple) -> Node | None:
+        constraints = node.constraints[:k] + (node.constraints[k] + added,) + node.constraints[k + 1:]
         path = self.replan(k, constraints[k], node.paths)
         if path is None:
             return None
@@ -221,7 +229,8 @@ class Tree:
             found = self._pairs[key]
             return None if found is None else max(found, floor)
         pair = Tree([self.agents[i], self.agents[j]], self.classic,
-                    Settings(heuristic="cg", max_nodes=PAIR_NODES), self.poll, {})
+                    Settings(heuristic="cg", rectangle=self.settings.rectangle, max_nodes=PAIR_NODES), self.poll, {},
+                    self.width)
         start = pair.root((node.constraints[i], node.constraints[j]), [node.paths[i], node.paths[j]])
         found = pair.best(start)
         base = node.costs[i] + node.costs[j]
@@ -315,12 +324,18 @@ class Tree:
     def expand(self, node: Node, push) -> None:
         conflict = self.choose(node)
         kind = node.kinds.get(conflict, 0)
+        if self.width is not None and conflict[0] == VERTEXC:
+            _, i, j, _, _ = conflict
+            found = rectangle(conflict, node.paths, (self.mdd(i, node), self.mdd(j, node)),
+                              (self.agents[i].goal, self.agents[j].goal), self.width)
+            if found is not None and found[1] >= max(kind, 1):
+                conflict, kind = found
         self.stats.setdefault("split", {}).setdefault(KIND_NAMES[conflict[0]], 0)
         self.stats["split"][KIND_NAMES[conflict[0]]] += 1
         children = []
-        for k, constraint in branches(conflict) if self.settings.target or conflict[0] != TARGET \
+        for k, added in branches(conflict) if self.settings.target or conflict[0] != TARGET \
                 else _plain(conflict, self.classic):
-            child = self.child(node, k, constraint)
+            child = self.child(node, k, added)
             if child is None:
                 continue
             if self.settings.bypass and kind < 2 and child.g == node.g and len(child.conflicts) < len(node.conflicts):
