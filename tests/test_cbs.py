@@ -10,7 +10,7 @@ from bille.solvers import solve, validate
 from helpers import make
 from refsearch import optimal_soc, walking_makespan
 
-SETTINGS = [{}, {"heuristic": "cg"}, {"heuristic": "none", "prioritize": False, "bypass": False, "target": False, "rectangle": False}]
+SETTINGS = [{}, {"heuristic": "cg"}, {"heuristic": "none", "prioritize": False, "bypass": False, "target": False, "rectangle": False, "corridor": False}]
 BUDGET = {"max_nodes": 400, "time_limit": None}  # a budget in nodes, not seconds (the solvable ones need 9)
 
 

@@ -25,10 +25,11 @@ from __future__ import annotations
 
 from .constraints import AFTER, CELL, EDGE, RANGE, VERTEX
 from .lowlevel import MDD, Agent, Path
+from .corridor import CORRIDOR
 from .rectangle import RECTANGLE
 
 CELLS, VERTEXC, EDGEC, TARGET = range(4)
-KIND_NAMES = ("cells", "vertex", "edge", "target", "rectangle")
+KIND_NAMES = ("cells", "vertex", "edge", "target", "rectangle", "corridor")
 
 
 def first_conflict(agents: list[Agent], i: int, pi: Path, j: int, pj: Path, classic: bool):
@@ -76,8 +77,8 @@ def _classic(agents: list[Agent], i: int, pi: Path, j: int, pj: Path, last: int)
 
 
 def branches(conflict) -> tuple[tuple[int, tuple], tuple[int, tuple]]:
-    """The two children of a conflict: ``(robot, constraints)`` each (module docstring; a
-    rectangle's, :mod:`.rectangle`, carry its two barriers)."""
+    """The two children of a conflict: ``(robot, constraints)`` each (module docstring; those
+    of a rectangle, :mod:`.rectangle`, or a corridor, :mod:`.corridor`, carry their own)."""
     kind, i, j, t, where = conflict
     if kind == CELLS:
         return (i, ((CELL, where, t),)), (j, ((CELL, where, t),))
@@ -86,7 +87,7 @@ def branches(conflict) -> tuple[tuple[int, tuple], tuple[int, tuple]]:
     if kind == EDGEC:
         u, v = where
         return (i, ((EDGE, u, v, t),)), (j, ((EDGE, v, u, t),))
-    if kind == RECTANGLE:
+    if kind == RECTANGLE or kind == CORRIDOR:
         return (i, where[0]), (j, where[1])
     return (i, ((AFTER, t),)), (j, ((RANGE, where, t),))
 

@@ -222,3 +222,21 @@ def mdd(agent: Agent, table: Table, classic: bool, cost: int) -> MDD:
         steps[t] = [m for m in steps[t] if m[1] in levels[t]]
         levels[t - 1] = {m[0] for m in steps[t]}
     return MDD(cost, tuple(frozenset(level) for level in levels), tuple(tuple(s) for s in steps))
+
+
+def meets_all(m: MDD | None, constraints: tuple) -> bool:
+    """Whether every path of the MDD is on a cell of the VERTEX ``constraints`` at its time (so
+    that forbidding them raises the robot's cost); False without an MDD."""
+    if m is None:
+        return False
+    banned: dict[int, set[int]] = {}
+    for _, cell, time in constraints:
+        banned.setdefault(time, set()).add(cell)
+    reach = set(m.levels[0]) - banned.get(0, set())
+    for time in range(1, m.cost + 1):
+        ban = banned.get(time, ())
+        reach = {q for p, q, _ in m.steps[time] if p in reach and q not in ban}
+        if not reach:
+            return True
+    later = [cells for time, cells in banned.items() if time > m.cost]
+    return all(any(p in cells for cells in later) for p in reach)  # a survivor stays on its cell

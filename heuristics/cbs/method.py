@@ -67,7 +67,7 @@ def closed_world(instance: Instance) -> bool:
 
 def plan(instance: Instance, *, objective: str = "sum-of-costs", w: float = 1.0, heuristic: str = "wdg",
          prioritize: bool = True, bypass: bool = True, target: bool = True, rectangle: bool = True,
-         time_limit: float | None = 60.0,
+         corridor: bool = True, time_limit: float | None = 60.0,
          max_nodes: int = 1_000_000) -> Result:
     """Conflict-based search on a path-planning instance (module docstring).
 
@@ -77,8 +77,9 @@ def plan(instance: Instance, *, objective: str = "sum-of-costs", w: float = 1.0,
         not broken) or ``makespan`` (the latest arrival).
     w : suboptimality (>= 1): the sum of costs found is at most ``w`` times optimal; 1 is optimal.
     heuristic : ``wdg``, ``cg`` or ``none`` (sum of costs only).
-    prioritize, bypass, target, rectangle : the improvements of :mod:`.search` (rectangle
-        reasoning applies under classic collisions to robots that move one cell at a time).
+    prioritize, bypass, target, rectangle, corridor : the improvements of :mod:`.search`
+        (rectangle and corridor reasoning apply under classic collisions; rectangles to robots
+        that move one cell at a time).
     time_limit : seconds; max_nodes : constraint-tree nodes expanded before giving up.
 
     On a map whose free cells are all tiles (no robot carrying) walking schedules are all the
@@ -109,7 +110,7 @@ def plan(instance: Instance, *, objective: str = "sum-of-costs", w: float = 1.0,
     def poll() -> bool:
         return deadline is not None and time.perf_counter() > deadline
 
-    settings = Settings(objective, heuristic, prioritize, bypass, target, rectangle, w, max_nodes)
+    settings = Settings(objective, heuristic, prioritize, bypass, target, rectangle, corridor, w, max_nodes)
     tree = Tree(agents, instance.collisions == "classic", settings, poll, stats,
                 instance.width if _grid_steps(instance) else None)
     try:

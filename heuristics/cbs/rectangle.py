@@ -44,7 +44,7 @@ raises that robot's cost) is chosen.
 from __future__ import annotations
 
 from .constraints import VERTEX
-from .lowlevel import MDD, Path
+from .lowlevel import MDD, Path, meets_all
 
 RECTANGLE = 4  # a conflict kind, after those of :mod:`.conflicts`
 
@@ -89,7 +89,7 @@ def rectangle(conflict, paths: list[Path], mdds: tuple[MDD | None, MDD | None], 
             b2 = tuple((VERTEX, cell(x, y1), (x - vx) + (y1 - vy)) for x in range(x0, x1 + 1))
             if not (_on(pi, b1) and _on(pj, b2)):
                 continue
-            score = _crossed(mdds[0], b1) + _crossed(mdds[1], b2)
+            score = meets_all(mdds[0], b1) + meets_all(mdds[1], b2)
             key = (score, (x1 - x0 + 1) * (y1 - y0 + 1))
             if best is None or key > best[0]:
                 best = (key, (RECTANGLE, i, j, t, (b1, b2)))
@@ -100,20 +100,3 @@ def _on(path: Path, barrier: tuple) -> bool:
     """Whether ``path`` is on a cell of ``barrier`` at its time."""
     last = len(path.poses) - 1
     return any(path.poses[min(time, last)] == b for _, b, time in barrier)
-
-
-def _crossed(m: MDD | None, barrier: tuple) -> bool:
-    """Whether every path of the MDD is on a cell of ``barrier`` at its time."""
-    if m is None:
-        return False
-    banned: dict[int, set[int]] = {}
-    for _, b, time in barrier:
-        banned.setdefault(time, set()).add(b)
-    reach = set(m.levels[0]) - banned.get(0, set())
-    for time in range(1, m.cost + 1):
-        ban = banned.get(time, ())
-        reach = {q for p, q, _ in m.steps[time] if p in reach and q not in ban}
-        if not reach:
-            return True
-    later = [cells for time, cells in banned.items() if time > m.cost]
-    return all(any(p in cells for cells in later) for p in reach)  # a survivor stays on its cell

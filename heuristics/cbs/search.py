@@ -19,6 +19,9 @@ Improvements (each can be switched off, for measurements):
 - *rectangle reasoning* (point robots on a 4-connected grid): a vertex conflict of two robots
   that came straight from their starts at right angles is split on two barriers instead, when
   that raises at least as many costs (:mod:`.rectangle`);
+- *corridor reasoning* (point robots): a vertex or swap conflict of two robots meeting head-on in
+  a corridor is split on which one goes through first (:mod:`.corridor`), when that raises at
+  least as many costs;
 - *focal search* with ``w > 1``: among the open nodes of ``g <= w * LB`` (``LB`` the least ``f``),
   the one with the fewest conflicts; the schedule's sum of costs is at most ``w`` times optimal,
   and ``LB`` is reported.
@@ -32,10 +35,11 @@ import itertools
 from dataclasses import dataclass, field
 
 from .classic import ClassicAvoid, matrix, meeting
-from .conflicts import KIND_NAMES, TARGET, VERTEXC, branches, first_conflict, forced
+from .conflicts import EDGEC, KIND_NAMES, TARGET, VERTEXC, branches, first_conflict, forced
 from .constraints import Table
 from .cover import cover
 from .lowlevel import MDD, Agent, Avoid, Path, mdd, search
+from .corridor import Corridors
 from .rectangle import rectangle
 
 OBJECTIVES = ("sum-of-costs", "makespan")
@@ -73,6 +77,7 @@ class Settings:
     bypass: bool = True
     target: bool = True
     rectangle: bool = True
+    corridor: bool = True
     w: float = 1.0
     max_nodes: int = 1_000_000
 
@@ -85,6 +90,7 @@ class Tree:
                  width: int | None = None) -> None:
         self.agents, self.classic, self.settings = agents, classic, settings
         self.width = width if classic and settings.rectangle else None
+        self.corridors = Corridors(agents) if classic and settings.corridor else None
         self.poll, self.stats = poll, stats
         self.soc = settings.objective == "sum-of-costs"
         self._tables: dict[tuple, Table] = {}
@@ -229,7 +235,8 @@ class Tree:
             found = self._pairs[key]
             return None if found is None else max(found, floor)
         pair = Tree([self.agents[i], self.agents[j]], self.classic,
-                    Settings(heuristic="cg", rectangle=self.settings.rectangle, max_nodes=PAIR_NODES), self.poll, {},
+                    Settings(heuristic="cg", rectangle=self.settings.rectangle, corridor=self.settings.corridor,
+                             max_nodes=PAIR_NODES), self.poll, {},
                     self.width)
         start = pair.root((node.constraints[i], node.constraints[j]), [node.paths[i], node.paths[j]])
         found = pair.best(start)
@@ -244,6 +251,18 @@ class Tree:
         the earliest."""
         return min(node.conflicts.values(),
                    key=lambda c: (-node.kinds.get(c, 0), c[0] != TARGET, c[3], c[1], c[2]))
+
+    def symmetry(self, node: Node, conflict, kind: int):
+        """A corridor or rectangle split in place of a vertex or swap ``conflict`` of
+        cardinality ``kind``, where one applies and raises at least as many costs."""
+        _, i, j, _, _ = conflict
+        mdds = (self.mdd(i, node), self.mdd(j, node))
+        found = None if self.corridors is None else self.corridors.split(conflict, node.paths, mdds)
+        if found is None and self.width is not None and conflict[0] == VERTEXC:
+            found = rectangle(conflict, node.paths, mdds, (self.agents[i].goal, self.agents[j].goal), self.width)
+            if found is not None and found[1] == 0:
+                found = None
+        return found if found is not None and found[1] >= kind else (conflict, kind)
 
     # ---- the search --------------------------------------------------------------------------
 
@@ -324,12 +343,8 @@ class Tree:
     def expand(self, node: Node, push) -> None:
         conflict = self.choose(node)
         kind = node.kinds.get(conflict, 0)
-        if self.width is not None and conflict[0] == VERTEXC:
-            _, i, j, _, _ = conflict
-            found = rectangle(conflict, node.paths, (self.mdd(i, node), self.mdd(j, node)),
-                              (self.agents[i].goal, self.agents[j].goal), self.width)
-            if found is not None and found[1] >= max(kind, 1):
-                conflict, kind = found
+        if conflict[0] in (VERTEXC, EDGEC) and (self.corridors is not None or self.width is not None):
+            conflict, kind = self.symmetry(node, conflict, kind)
         self.stats.setdefault("split", {}).setdefault(KIND_NAMES[conflict[0]], 0)
         self.stats["split"][KIND_NAMES[conflict[0]]] += 1
         children = []

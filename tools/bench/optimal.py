@@ -32,7 +32,7 @@ from ..common import solved
 from ..tables import text_table
 from .mapf import SCENARIO
 
-BASIC = {"heuristic": "none", "prioritize": False, "bypass": False, "target": False, "rectangle": False}
+BASIC = {"heuristic": "none", "prioritize": False, "bypass": False, "target": False, "rectangle": False, "corridor": False}
 RUNS = (("cbs", "cbs", {}), ("basic CBS", "cbs", BASIC), ("joint A*", "astar", {}))
 
 

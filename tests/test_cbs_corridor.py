@@ -1,0 +1,94 @@
+"""Corridor reasoning: the split's completeness model-checked on small maps (no pair of walks
+without a conflict breaks both branches), and optima where it is used against the brute force."""
+from random import Random
+
+import pytest
+
+from bille.heuristics.cbs.conflicts import VERTEXC
+from bille.heuristics.cbs.constraints import Table
+from bille.heuristics.cbs.corridor import Corridors
+from bille.heuristics.cbs.lowlevel import search
+from bille.heuristics.cbs.method import agents_of
+from bille.heuristics.joint import JointProblem
+from bille.solvers import solve, validate
+from helpers import make
+from refsearch import optimal_soc
+
+MAPS = [  # 'T': tile, '#': obstacle; corridors of one to three cells, with and without a way round
+    "TT###TT\nTTTTTTT\nTT###TT",
+    "TTTTTTT\nTT###TT\nTTTTTTT",
+    "TT#TT\nTTTTT\nTT#TT",
+    "TTT#\n#T##\n#TTT",
+    "TTTTTTT\nTT###TT\nTT###TT\nTTTTTTT",
+    "TT##TT\nTTTTTT\nTT##TT\nTT##TT",
+]
+
+
+def instance(drawing: str, seed: int):
+    """Two point robots on ``drawing`` with random starts and goals; None for a repeated cell."""
+    rows = drawing.split("\n")
+    cells = [(x, y) for y, row in enumerate(rows) for x, ch in enumerate(row) if ch == "T"]
+    rnd = Random(seed)
+    starts, goals = rnd.sample(cells, 2), rnd.sample(cells, 2)
+    return make(drawing, [{"at": list(s)} for s in starts], moveset="point", collisions="classic",
+                robot_goals=[list(g) for g in goals], name=f"corridor{seed}")
+
+
+def splits(drawing: str, seeds):
+    """``(instance, corridors, split)`` for every corridor cell where the two robots' shortest
+    paths make the corridor split applicable."""
+    for seed in seeds:
+        inst = instance(drawing, seed)
+        agents = agents_of(JointProblem.of(inst, "cbs"))
+        paths = [search(a, Table(()), None, True) for a in agents]
+        if None in paths:
+            continue
+        corridors = Corridors(agents)
+        for v in range(inst.width * inst.height):
+            if agents[0].dist[v] < 1 << 20 and corridors.chain(0, v) is not None:
+                found = corridors.split((VERTEXC, 0, 1, 1, v), paths, (None, None))
+                if found is not None:
+                    yield inst, corridors, found[0]
+
+
+def breaking_pair(corridors: Corridors, split) -> bool:
+    """Whether two walks without a conflict (no shared cell at one time, no exchange of two cells
+    in one step) can both break their branches: a search over (cell, cell, broken?, broken?)."""
+    _, i, j, _, (bi, bj) = split
+    (ei, ti), (ej, tj) = [(b[0][1], len(b) - 1) for b in (bi, bj)]
+    a = corridors.agents
+    layer = {(a[i].start, a[j].start, a[i].start == ei, a[j].start == ej)}
+    for time in range(1, max(ti, tj) + 1):
+        nxt = set()
+        for p, q, fi, fj in layer:
+            for p1 in [p] + corridors.neighbours(i, p):
+                for q1 in [q] + corridors.neighbours(j, q):
+                    if p1 == q1 or (p1 == q and q1 == p):
+                        continue
+                    nxt.add((p1, q1, fi or (p1 == ei and time <= ti), fj or (q1 == ej and time <= tj)))
+        layer = nxt
+    return any(fi and fj for _, _, fi, fj in layer)
+
+
+@pytest.mark.parametrize("drawing", MAPS)
+def test_no_two_walks_without_a_conflict_break_both_branches(drawing):
+    found = list(splits(drawing, range(40)))
+    assert found, "no corridor split on this map"
+    for _, corridors, split in found:
+        assert not breaking_pair(corridors, split), split
+
+
+def test_where_a_corridor_is_split_the_optimum_is_the_brute_forces():
+    used = 0
+    for drawing in MAPS:
+        for seed in range(30):
+            inst = instance(drawing, seed)
+            result = solve(inst, "cbs", time_limit=None, max_nodes=3000)
+            if not result.stats.get("split", {}).get("corridor"):
+                continue
+            used += 1
+            assert result.status == "optimal" and validate(inst, result.schedule).valid
+            plain = solve(inst, "cbs", corridor=False, time_limit=None, max_nodes=3000)
+            assert result.stats["sum_of_costs"] == optimal_soc(inst)[0], inst.name
+            assert plain.status != "optimal" or plain.stats["sum_of_costs"] == result.stats["sum_of_costs"]
+    assert used >= 10
