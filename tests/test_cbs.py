@@ -92,15 +92,17 @@ def test_makespan_matches_the_brute_force(inst):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("w", [1.5, 2.0])
-def test_focal_search_stays_within_w_and_its_bound_is_below_the_optimum(w):
+@pytest.mark.parametrize("focal", ["conflicts", "ees"])
+def test_focal_search_stays_within_w_and_its_bound_is_below_the_optimum(focal):
     for inst in TINY[:30]:
         expected = optimal_soc(inst)
         if expected is None:
             continue
-        result = solve(inst, "cbs", w=w, **BUDGET)
-        assert result.status == "feasible" and validate(inst, result.schedule).valid
-        assert result.stats["lower_bound_sum_of_costs"] <= expected[0] <= result.stats["sum_of_costs"] <= w * expected[0]
+        for w in (1.1, 1.5, 2.0):
+            result = solve(inst, "cbs", w=w, focal=focal, **BUDGET)
+            assert result.status == "feasible" and validate(inst, result.schedule).valid
+            assert result.stats["lower_bound_sum_of_costs"] <= expected[0] <= result.stats["sum_of_costs"] \
+                <= w * expected[0]
 
 
 SWAP = "TTTTT\n.T.T."  # two bays: robots can pass each other
@@ -155,6 +157,7 @@ def test_cbs_agrees_with_joint_astar_on_bundled_maps(name):
     ({"objective": "flowtime"}, "unknown objective"),
     ({"heuristic": "dg2"}, "unknown heuristic"),
     ({"w": 0.5}, "at least 1"),
+    ({"w": 1.5, "focal": "best"}, "unknown focal"),
     ({"w": 2.0, "objective": "makespan"}, "sum of costs"),
 ])
 def test_bad_options_get_one_clear_error(options, message):

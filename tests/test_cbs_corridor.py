@@ -1,5 +1,6 @@
 """Corridor reasoning: the split's completeness model-checked on small maps (no pair of walks
-without a conflict breaks both branches), and optima where it is used against the brute force."""
+without a conflict breaks both branches), and optima where it is used against the brute force
+(bounded-suboptimal runs too)."""
 from random import Random
 
 import pytest
@@ -89,6 +90,11 @@ def test_where_a_corridor_is_split_the_optimum_is_the_brute_forces():
             used += 1
             assert result.status == "optimal" and validate(inst, result.schedule).valid
             plain = solve(inst, "cbs", corridor=False, time_limit=None, max_nodes=3000)
-            assert result.stats["sum_of_costs"] == optimal_soc(inst)[0], inst.name
+            best = optimal_soc(inst)[0]
+            assert result.stats["sum_of_costs"] == best, inst.name
             assert plain.status != "optimal" or plain.stats["sum_of_costs"] == result.stats["sum_of_costs"]
+            for focal in ("conflicts", "ees"):
+                bounded = solve(inst, "cbs", w=1.3, focal=focal, time_limit=None, max_nodes=3000)
+                assert validate(inst, bounded.schedule).valid
+                assert bounded.stats["lower_bound_sum_of_costs"] <= best <= bounded.stats["sum_of_costs"] <= 1.3 * best
     assert used >= 10

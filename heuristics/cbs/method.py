@@ -13,7 +13,7 @@ from bille.instances.schedule import Schedule
 
 from ..joint import NO_WALK, JointProblem, check_tables, require_path_planning
 from .lowlevel import Agent, Budget
-from .search import HEURISTICS, OBJECTIVES, Node, OutOfBudget, Settings, Tree
+from .search import FOCALS, HEURISTICS, OBJECTIVES, Node, OutOfBudget, Settings, Tree
 
 def agents_of(problem: JointProblem) -> list[Agent]:
     agents = []
@@ -67,7 +67,7 @@ def closed_world(instance: Instance) -> bool:
 
 def plan(instance: Instance, *, objective: str = "sum-of-costs", w: float = 1.0, heuristic: str = "wdg",
          prioritize: bool = True, bypass: bool = True, target: bool = True, rectangle: bool = True,
-         corridor: bool = True, time_limit: float | None = 60.0,
+         corridor: bool = True, focal: str = "conflicts", time_limit: float | None = 60.0,
          max_nodes: int = 1_000_000) -> Result:
     """Conflict-based search on a path-planning instance (module docstring).
 
@@ -76,6 +76,8 @@ def plan(instance: Instance, *, objective: str = "sum-of-costs", w: float = 1.0,
     objective : ``sum-of-costs`` (each robot's arrival at its goal for good, added up; ties
         not broken) or ``makespan`` (the latest arrival).
     w : suboptimality (>= 1): the sum of costs found is at most ``w`` times optimal; 1 is optimal.
+    focal : with ``w > 1``, how a node is chosen among those within the bound: ``conflicts``
+        (the fewest) or ``ees`` (explicit estimation, EECBS's high level).
     heuristic : ``wdg``, ``cg`` or ``none`` (sum of costs only).
     prioritize, bypass, target, rectangle, corridor : the improvements of :mod:`.search`
         (rectangle and corridor reasoning apply under classic collisions; rectangles to robots
@@ -91,6 +93,8 @@ def plan(instance: Instance, *, objective: str = "sum-of-costs", w: float = 1.0,
         raise OptionError(f"cbs: unknown objective '{objective}' (expected one of: {', '.join(OBJECTIVES)})")
     if heuristic not in HEURISTICS:
         raise OptionError(f"cbs: unknown heuristic '{heuristic}' (expected one of: {', '.join(HEURISTICS)})")
+    if focal not in FOCALS:
+        raise OptionError(f"cbs: unknown focal '{focal}' (expected one of: {', '.join(FOCALS)})")
     if not w >= 1:
         raise OptionError(f"cbs: option w expects a number of at least 1, got {w}")
     if w > 1 and objective != "sum-of-costs":
@@ -110,7 +114,8 @@ def plan(instance: Instance, *, objective: str = "sum-of-costs", w: float = 1.0,
     def poll() -> bool:
         return deadline is not None and time.perf_counter() > deadline
 
-    settings = Settings(objective, heuristic, prioritize, bypass, target, rectangle, corridor, w, max_nodes)
+    settings = Settings(objective, heuristic, prioritize, bypass, target, rectangle, corridor, w, focal,
+                        max_nodes)
     tree = Tree(agents, instance.collisions == "classic", settings, poll, stats,
                 instance.width if _grid_steps(instance) else None)
     try:

@@ -22,28 +22,29 @@ Improvements (each can be switched off, for measurements):
 - *corridor reasoning* (point robots): a vertex or swap conflict of two robots meeting head-on in
   a corridor is split on which one goes through first (:mod:`.corridor`), when that raises at
   least as many costs;
-- *focal search* with ``w > 1``: among the open nodes of ``g <= w * LB`` (``LB`` the least ``f``),
-  the one with the fewest conflicts; the schedule's sum of costs is at most ``w`` times optimal,
-  and ``LB`` is reported.
+- *focal search* with ``w > 1`` (:mod:`.frontier`): among the nodes whose ``g`` is within ``w``
+  times the lower bound, the one with the fewest conflicts (or, with ``focal="ees"``, explicit
+  estimation as in EECBS's high level); the schedule's sum of costs is at most ``w`` times
+  optimal, and the lower bound is reported.
 
 Under the makespan objective ``g`` is the largest cost and no estimate is added.
 """
 from __future__ import annotations
 
-import heapq
-import itertools
 from dataclasses import dataclass, field
 
 from .classic import ClassicAvoid, matrix, meeting
 from .conflicts import EDGEC, KIND_NAMES, TARGET, VERTEXC, branches, first_conflict, forced
 from .constraints import Table
 from .cover import cover
+from .frontier import BestFirst, Explicit, Focal
 from .lowlevel import MDD, Agent, Avoid, Path, mdd, search
 from .corridor import Corridors
 from .rectangle import rectangle
 
 OBJECTIVES = ("sum-of-costs", "makespan")
 HEURISTICS = ("wdg", "cg", "none")
+FOCALS = ("conflicts", "ees")
 PAIR_NODES = 64  # constraint-tree nodes for solving one pair of robots alone (WDG)
 
 
@@ -61,6 +62,7 @@ class Node:
     h: int = 0
     depth: int = 0
     estimated: bool = False  # h computed for this node's own conflicts
+    fhat: float = 0.0  # the estimate of focal search (w > 1, :mod:`.frontier`)
     closed: bool = False
     kinds: dict = field(default_factory=dict)  # conflict -> 2 cardinal, 1 semi-cardinal, 0 non
 
@@ -79,6 +81,7 @@ class Settings:
     rectangle: bool = True
     corridor: bool = True
     w: float = 1.0
+    focal: str = "conflicts"
     max_nodes: int = 1_000_000
 
 
@@ -96,7 +99,6 @@ class Tree:
         self._tables: dict[tuple, Table] = {}
         self._mdds: dict[tuple, MDD] = {}
         self._pairs: dict[tuple, int | None] = {}
-        self.counter = itertools.count()
         self.lower = 0
 
     # ---- paths ------------------------------------------------------------------------------
@@ -276,69 +278,55 @@ class Tree:
         return None if found is None else found.g
 
     def run(self, root: Node | None) -> Node | None:
-        """The optimal (focal: bounded-suboptimal) conflict-free node, or None if there is none.
-        Raises :class:`OutOfBudget` (``self.lower`` then holds the bound proved)."""
+        """The optimal (``w > 1``: bounded-suboptimal) conflict-free node, or None if there is
+        none. Raises :class:`OutOfBudget` (``self.lower`` then holds the bound proved)."""
         if root is None:
             return None
         settings = self.settings
-        focal_mode = settings.w > 1
-        by_f: list = []  # (f, conflicts, -depth, n, node)
-        focal: list = []  # (conflicts, f, n, node): nodes with g <= w * LB
-        pending: list = []  # (g, n, node): open nodes not yet in focal
+        if settings.w == 1:
+            lists = BestFirst()
+        else:
+            lists = Explicit(settings.w, self.settle) if settings.focal == "ees" else Focal(settings.w)
+        lists.push(root)
         expanded = 0
-
-        def push(n: Node) -> None:
-            count = next(self.counter)
-            heapq.heappush(by_f, (n.f, len(n.conflicts), -n.depth, count, n))
-            if focal_mode:
-                heapq.heappush(pending, (n.g, count, n))
-
-        def least_f() -> int | None:
-            while by_f and (by_f[0][4].closed or by_f[0][0] != by_f[0][4].f):
-                heapq.heappop(by_f)
-            return by_f[0][0] if by_f else None
-
-        push(root)
         while True:
-            low = least_f()
+            low = lists.lower()
             if low is None:
                 return None
             self.lower = max(self.lower, low)
-            if focal_mode:
-                limit = settings.w * self.lower
-                while pending and pending[0][0] <= limit:
-                    _, count, n = heapq.heappop(pending)
-                    if not n.closed:
-                        heapq.heappush(focal, (len(n.conflicts), n.f, count, n))
-                while focal and focal[0][3].closed:
-                    heapq.heappop(focal)
-                node = focal[0][3] if focal else by_f[0][4]
-                if focal:
-                    heapq.heappop(focal)
-            else:
-                node = heapq.heappop(by_f)[4]
+            node = lists.select(self.lower)
             if self.poll is not None and self.poll():
                 raise OutOfBudget
             if not node.conflicts:
                 node.closed = True
                 return node
-            if not node.estimated:
-                self.classify(node)
-                h = self.estimate(node)
-                node.estimated = True
-                if h is None:
+            if not node.estimated:  # best-first: the estimate is computed when a node comes first
+                f = node.f
+                if not self.settle(node):
                     node.closed = True
                     continue
-                if node.g + h > node.f:
-                    node.h = h
-                    push(node)
+                if node.f > f:
+                    lists.push(node)
                     continue
             node.closed = True
             expanded += 1
             self.stats["expanded"] = self.stats.get("expanded", 0) + 1
             if expanded > settings.max_nodes:
                 raise OutOfBudget
-            self.expand(node, push)
+            children: list[Node] = []
+            self.expand(node, lambda child: (children.append(child), lists.push(child)))
+            lists.learn(node, children)
+
+    def settle(self, node: Node) -> bool:
+        """Give ``node`` its own estimate (raising ``h`` where it is higher than inherited);
+        False when its subtree is empty."""
+        self.classify(node)
+        h = self.estimate(node)
+        node.estimated = True
+        if h is None:
+            return False
+        node.h = max(node.h, h)
+        return True
 
     def expand(self, node: Node, push) -> None:
         conflict = self.choose(node)
