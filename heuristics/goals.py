@@ -7,7 +7,9 @@ gives way instead of holding a pose others need (a relay tile not dropped yet, a
 wait for another job). An idle robot is bound for its goal cell if it has one; else, with
 *parking* (the LaCAM* motion layer), for a pose out of the way of the work at hand; else, when
 it stands on a tile that a pending job must pick, for any pose whose feet are off those tiles;
-any other idle robot is free (it only keeps out of the way).
+else, when the loop has *evicted* it (:meth:`Goals.evict`, its last resort before a deadlock),
+for any pose whose feet are off the cells the busy robots' goal poses need; any other idle
+robot is free (it only keeps out of the way).
 
 A goal is a distance table over the robot's poses, named by what it means (the robot type, the
 tiles, whether it carries, and the goal itself), so that a table and its plain-list copies for
@@ -54,6 +56,29 @@ class Goals:
         self.instance, self.manipulation, self.parking = instance, manipulation, parking
         self._type = {int(i): k for k, (_, robots) in enumerate(instance.world.groups) for i in robots}
         self._goals: LRU[Goal] = LRU(512)
+        self.evicted: dict[int, frozenset[int]] = {}  # idle robot -> cells it must leave
+
+    def evict(self, s: LoopState) -> bool:
+        """Bind every idle robot (no legs, no goal cell) that stands on a cell a busy robot needs
+        (of its goal poses, or swept on one shortest walk to them) for a pose off those cells;
+        whether one was. The loop's last resort when it goes round in circles: Temporal A*
+        moves a blocked robot up, but a robot with no goal only waits, wherever it stands."""
+        needed: set[int] = set()
+        for j in range(s.num_robots):
+            goal = self.of(s, j)
+            if goal is not None and (s.legs[j] or self.instance.goal_cells[j] >= 0):
+                walk = s.walk(j)
+                feet = walk.graph.feet[np.flatnonzero(goal.dist == 0)]
+                needed.update(int(c) for c in feet.ravel() if c >= 0)
+                needed.update(_downhill(walk, goal, s.poses[j]))
+        found = False
+        for i in range(s.num_robots):
+            if s.legs[i] or self.instance.goal_cells[i] >= 0 or i in self.evicted:
+                continue
+            if needed.intersection(s.cells_now(i)):
+                self.evicted[i] = frozenset(needed)
+                found = True
+        return found
 
     def all(self, s: LoopState) -> list[Goal | None]:
         return [self.of(s, i) for i in range(s.num_robots)]
@@ -74,6 +99,8 @@ class Goals:
             return self._goal(i, walk, ("front", cell), lambda: walk.distances(cell))
         if self.parking:
             return self._parking(s, i, walk)
+        if i in self.evicted:
+            return self._off(i, walk, self.evicted[i], s.poses[i])
         needed = s.pending_picks()
         feet = walk.graph.feet
         if needed.intersection(feet[s.poses[i]].tolist()):  # off the tiles still to be picked
@@ -83,6 +110,14 @@ class Goals:
             key = ("clear", frozenset(needed))
             return self._goal(i, walk, key, lambda: walk.distances_to(key, clear))
         return None
+
+    def _off(self, i: int, walk: Walk, cells: frozenset[int], pose: int) -> Goal | None:
+        """The poses whose feet are off ``cells``; None (free) if the robot can reach none."""
+        feet = walk.graph.feet
+        key = ("off", cells)
+        goal = self._goal(i, walk, key, lambda: walk.distances_to(
+            key, lambda: np.flatnonzero(walk.standing & ~np.isin(feet, list(cells)).any(axis=1))))
+        return None if goal.dist[pose] >= UNREACHABLE else goal
 
     def _goal(self, i: int, walk: Walk, name: tuple, make) -> Goal:
         key = (self._type[i], walk.tiles.tobytes(), walk.carrying, name)
@@ -131,3 +166,13 @@ class Goals:
 
         key = ("pick", pick, place)
         return self._goal(i, walk, key, lambda: walk.distances_to(key, sources))
+
+
+def _downhill(walk: Walk, goal: Goal, pose: int) -> set[int]:
+    """The cells swept on one shortest walk from ``pose`` to ``goal`` (none if unreachable)."""
+    cells: set[int] = set()
+    dist = goal.dist
+    while UNREACHABLE > dist[pose] > 0:
+        swept, pose = next((c, q) for _, q, c in walk.moves(pose) if dist[q] == dist[pose] - 1)
+        cells |= swept
+    return cells

@@ -131,7 +131,7 @@ class Loop:
                             "epsilon": epsilon, "jobs": len(jobs), "steps": 0, "relays": 0, "swaps": 0,
                             "pairs_considered": 0, "deferred_manipulations": 0, "priority_shifts": 0,
                             "circle_shifts": 0, "cautious_steps": 0, "replans": 0, "expanded": 0, "backtracks": 0,
-                            "goals_dropped": 0, "drops": 0,
+                            "goals_dropped": 0, "drops": 0, "evictions": 0,
                             "plan_ms_mean": 0.0, "plan_ms_max": 0.0}
         self.motion: Motion = MOTIONS[motion](epsilon=epsilon, horizon=horizon) if isinstance(motion, str) else motion
         self.motion.start(instance, self.stats)
@@ -198,6 +198,12 @@ class Loop:
                     if self.transfer is not None and self.transfer.can_backtrack():
                         seen = self._backtrack()
                         continue
+                    if self.goals.evict(s):  # idle robots leave the poses the others need
+                        stats["evictions"] += 1
+                        stats["circle_shifts"] = 0
+                        seen = set()
+                        motion.forget()
+                        continue
                     return stop("deadlock")
                 busy = [i for i in s.Q if s.legs[i] or self.goals.of(s, i) is not None] or list(s.Q)
                 shift_up(s.Q, busy[-1])
@@ -224,6 +230,8 @@ class Loop:
             if not isinstance(nxt, State):  # the planners respect the rules; this is a bug
                 return stop(f"internal: {nxt}", status="error")
             progress = s.advance(joint, nxt, fixed)
+            if progress:
+                self.goals.evicted.clear()  # the work has moved on: evicted robots are idle again
             motion.stepped(s, fixed, goals, progress)
             stats["steps"] = len(s.steps)
         timing(stats, step_times)

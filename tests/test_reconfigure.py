@@ -434,3 +434,25 @@ def test_where_every_robot_blocks_the_others_fewer_robots_finish():
     report = validate(inst, schedule)
     assert report.valid and report.metrics.makespan == found.makespan
     assert len(_manipulators(inst, schedule)) < inst.num_robots
+
+
+IDLE_IN_THE_WAY = dict(grid="TTTTTTT\nTTTTTTT\n.......\n.......", goal="TTTTTTT\nTTTT.TT\nT......\n.......",
+                       robots=[{"front": [4, 0], "back": [3, 0]}, {"front": [1, 1], "back": [0, 1]}])
+
+
+@pytest.mark.parametrize("options", [{}, {"load_transfer": True}, {"horizon": 10}])
+def test_an_idle_robot_on_the_only_pose_facing_the_place_is_evicted(options):
+    # robot 1 has no job and stands where robot 0 must stand to place its tile at (0, 2)
+    inst = make(IDLE_IN_THE_WAY["grid"], IDLE_IN_THE_WAY["robots"], goal=IDLE_IN_THE_WAY["goal"])
+    result = plan(inst, **options)
+    assert result.status == "feasible", result.stats.get("failure")
+    assert result.stats["evictions"] >= 1
+    assert validate(inst, result.schedule).valid
+
+
+def test_a_run_that_does_not_go_round_in_circles_evicts_no_one():
+    inst = make(IDLE_IN_THE_WAY["grid"], [IDLE_IN_THE_WAY["robots"][0], {"front": [6, 0], "back": [5, 0]}],
+                goal=IDLE_IN_THE_WAY["goal"])
+    result = plan(inst)
+    assert result.status == "feasible" and result.stats["evictions"] == 0
+    assert validate(inst, result.schedule).valid
