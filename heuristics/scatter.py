@@ -17,61 +17,75 @@ import random
 import time
 
 
+NEVER = 1 << 30  # no path ends on the cell
+
+
 class CollisionTable:
-    """Who stands where at which step, for paths without waits: ``at[t * P + v]`` lists the
-    robots at ``v`` at step ``t``; ``ends[v]`` the steps at which paths end on ``v`` (their
-    robot rests there from then on)."""
+    """Who stands where at which step, for paths without waits: ``at[t * P + v]`` counts the
+    robots at ``v`` at step ``t`` (a flat list, grown as longer paths come); ``moved`` counts the
+    robots moving ``u -> v`` in step ``t -> t + 1`` (key ``(t * P + u) * P + v``); ``end[v]`` is
+    the step at which the path ending on ``v`` ends (its robot rests there from then on; goals
+    are distinct)."""
 
     def __init__(self, size: int) -> None:
         self.size = size
-        self.at: dict[int, list[int]] = {}
-        self.ends: dict[int, list[int]] = {}
+        self.at: list[int] = []
+        self.moved: dict[int, int] = {}
+        self.end = [NEVER] * size
         self.count = 0
         self.horizon = 0  # no path is longer
+        self.closed = [0] * size  # the searches' closed cells: ``closed[v] == stamp``
+        self.parent = [0] * size
+        self.stamp = 0
+
+    def reserve(self, steps: int) -> None:
+        """Room in ``at`` for steps ``0 .. steps``."""
+        need = (steps + 1) * self.size
+        if len(self.at) < need:
+            self.at.extend([0] * (need - len(self.at)))
 
     def cost(self, v: int, u: int, t: int) -> int:
         """Collisions of a step from ``v`` at ``t`` to ``u`` at ``t + 1``: robots at ``u`` then,
         robots coming the other way, robots resting at ``u`` by then."""
-        P, at = self.size, self.at
-        n = 0
-        there = at.get((t + 1) * P + u)
-        if there:
-            n += len(there)
-        back = at.get((t + 1) * P + v)
-        if back:
-            came = at.get(t * P + u)
-            if came:
-                n += sum(1 for j in back if j in came)
-        ends = self.ends.get(u)
-        if ends:
-            n += sum(1 for e in ends if e < t + 1)
-        return n
+        P = self.size
+        return self.at[(t + 1) * P + u] + self.moved.get((t * P + u) * P + v, 0) + (self.end[u] < t + 1)
 
     def enroll(self, i: int, path: list[int]) -> None:
-        P, at = self.size, self.at
+        P, moved = self.size, self.moved
+        self.reserve(len(path))
+        at = self.at
         for t, v in enumerate(path):
             if t:
-                self.count += self.cost(path[t - 1], v, t - 1)
-            at.setdefault(t * P + v, []).append(i)
-        end = len(path) - 1
+                u = path[t - 1]
+                self.count += self.cost(u, v, t - 1)
+                key = ((t - 1) * P + u) * P + v
+                moved[key] = moved.get(key, 0) + 1
+            at[t * P + v] += 1
+        end, goal = len(path) - 1, path[-1]
+        if self.end[goal] != NEVER:
+            raise ValueError(f"two paths end on cell {goal}")
         self.horizon = max(self.horizon, end)
-        goal = path[-1]
-        self.ends.setdefault(goal, []).append(end)
+        self.end[goal] = end
         self.count += self._after(goal, end)
 
     def clear(self, i: int, path: list[int]) -> None:
-        P, at = self.size, self.at
+        P, at, moved = self.size, self.at, self.moved
         for t, v in enumerate(path):
-            at[t * P + v].remove(i)
+            at[t * P + v] -= 1
             if t:
-                self.count -= self.cost(path[t - 1], v, t - 1)
-        end = len(path) - 1
-        goal = path[-1]
-        self.ends[goal].remove(end)
+                u = path[t - 1]
+                key = ((t - 1) * P + u) * P + v
+                moved[key] -= 1
+                if not moved[key]:
+                    del moved[key]
+                self.count -= self.cost(u, v, t - 1)
+        end, goal = len(path) - 1, path[-1]
+        self.end[goal] = NEVER
         self.count -= self._after(goal, end)
 
     def meets(self, path: list[int]) -> int:
         """Collisions of ``path`` with the paths in the table."""
+        self.reserve(len(path))
         cost = self.cost
         n = sum(cost(path[t - 1], path[t], t - 1) for t in range(1, len(path)))
         return n + self._after(path[-1], len(path) - 1)
@@ -79,7 +93,7 @@ class CollisionTable:
     def _after(self, v: int, end: int) -> int:
         """Robots passing ``v`` after a path ended there."""
         P, at = self.size, self.at
-        return sum(len(at.get(t * P + v, ())) for t in range(end + 1, self.horizon + 1))
+        return sum(at[t * P + v] for t in range(end + 1, self.horizon + 1))
 
 
 def scatter(nbrs: list[list[int]], dists: list[list[int]], starts: list[int], goals: list[int], *,
@@ -129,16 +143,20 @@ def _path(nbrs, dist, start: int, goal: int, bound: int, table: CollisionTable) 
     + u * P + parent`` (ints compare faster than tuples)."""
     P = table.size
     PP, F = P * P, bound + 2
-    at, ends = table.at, table.ends
-    parent: dict[int, int] = {}
+    table.reserve(bound + 1)
+    at, moved, end = table.at, table.moved, table.end
+    closed, parent = table.closed, table.parent
+    table.stamp += 1
+    stamp = table.stamp
     heap = [((dist[start] * F + F - 1) * P + start) * P + start]
     pop, push = heapq.heappop, heapq.heappush
     while heap:
         x = pop(heap)
         key, rest = divmod(x, PP)
         v, p = divmod(rest, P)
-        if v in parent:
+        if closed[v] == stamp:
             continue
+        closed[v] = stamp
         parent[v] = p
         if v == goal:
             path = [v]
@@ -146,22 +164,18 @@ def _path(nbrs, dist, start: int, goal: int, bound: int, table: CollisionTable) 
                 v = parent[v]
                 path.append(v)
             return path[::-1]
-        c, g = divmod(key, F * F)[0], F - 1 - key % F
+        c, g = key // (F * F), F - 1 - key % F
         t = g + 1  # arriving at a neighbour
-        back = at.get(t * P + v)
+        row = t * P
+        swaps = (g * P * P + v) if moved else -1  # + u * P: robots moving u -> v in step g -> t
         for u in nbrs[v]:
             d = dist[u]
-            if g + 1 + d > bound or u in parent or u == start:
+            if t + d > bound or closed[u] == stamp or u == start:
                 continue
-            n = c
-            there = at.get(t * P + u)
-            if there:
-                n += len(there)
-            if back:
-                came = at.get(g * P + u)
-                if came:
-                    n += sum(1 for j in back if j in came)
-            if u in ends:
-                n += sum(1 for e in ends[u] if e < t)
+            n = c + at[row + u]
+            if swaps >= 0:
+                n += moved.get(swaps + u * P, 0)
+            if end[u] < t:
+                n += 1
             push(heap, (((n * F + t + d) * F + F - 1 - t) * P + u) * P + v)
     return None
