@@ -133,3 +133,20 @@ def test_bench_mapf_optimal_compares_the_exact_methods_with_a_table_and_csv(caps
     assert validate(inst, result.schedule).valid and str(result.stats["sum_of_costs"]) == by["cbs"]["sum_of_costs"]
     if by["joint A*"]["status"] == "optimal":
         assert by["joint A*"]["sum_of_costs"] == by["cbs"]["sum_of_costs"]
+
+
+def test_the_sum_of_costs_in_the_metrics_is_the_benchmarks_and_cbss():
+    from bille.heuristics.cbs import plan as cbs
+    from bille.instances import load_instance
+    from bille.instances.bundled import bundled_path
+    from bille.solvers import load_schedule
+
+    inst = load_instance(bundled_path("point-4"))
+    found = cbs(inst)
+    report = validate(inst, found.schedule)
+    assert report.valid
+    assert report.metrics.sum_of_costs == sum_of_costs(inst, found.schedule) == found.stats["sum_of_costs"]
+    lt = load_instance(bundled_path("lt-1"))  # no robot has a goal cell: no sum of costs
+    assert not any(c >= 0 for c in lt.goal_cells)
+    shipped = validate(lt, load_schedule(str(bundled_path("lt-1")).replace(".yaml", ".schedule.yaml")))
+    assert shipped.valid and "sum_of_costs" not in shipped.metrics.to_json()
