@@ -158,6 +158,7 @@ def test_cbs_agrees_with_joint_astar_on_bundled_maps(name):
     ({"heuristic": "dg2"}, "unknown heuristic"),
     ({"w": 0.5}, "at least 1"),
     ({"w": 1.5, "focal": "best"}, "unknown focal"),
+    ({"focal": "ees"}, "give w > 1"),
     ({"w": 2.0, "objective": "makespan"}, "sum of costs"),
 ])
 def test_bad_options_get_one_clear_error(options, message):

@@ -97,6 +97,8 @@ def plan(instance: Instance, *, objective: str = "sum-of-costs", w: float = 1.0,
         raise OptionError(f"cbs: unknown focal '{focal}' (expected one of: {', '.join(FOCALS)})")
     if not w >= 1:
         raise OptionError(f"cbs: option w expects a number of at least 1, got {w}")
+    if focal != "conflicts" and w == 1:
+        raise OptionError(f"cbs: focal={focal} chooses among nodes within w of the bound; give w > 1 with it")
     if w > 1 and objective != "sum-of-costs":
         raise OptionError("cbs: w > 1 bounds the sum of costs; use it with objective=sum-of-costs")
     require_path_planning(instance, "cbs")

@@ -36,10 +36,10 @@ from dataclasses import dataclass, field
 from .classic import ClassicAvoid, matrix, meeting
 from .conflicts import EDGEC, KIND_NAMES, TARGET, VERTEXC, branches, first_conflict, forced
 from .constraints import Table
+from .corridor import Corridors
 from .cover import cover
 from .frontier import BestFirst, Explicit, Focal
 from .lowlevel import MDD, Agent, Avoid, Path, mdd, search
-from .corridor import Corridors
 from .rectangle import rectangle
 
 OBJECTIVES = ("sum-of-costs", "makespan")
