@@ -298,3 +298,27 @@ def test_a_schedule_keyed_by_the_instance_names_is_read_by_name_even_when_they_l
                          tmp_path / "i.mrp.yaml")
     assert code == 0, err
     assert "keyed by index" not in out
+
+
+@pytest.mark.parametrize("target", ["out.mrp.yaml", "out.scen", "plain-named.yaml"])
+def test_solve_and_check_read_other_formats_directly(mapf, tmp_path, capsys, target):
+    inst, path = mapf
+    written = tmp_path / ("out.mrp.yaml" if target == "plain-named.yaml" else target)
+    assert cli(capsys, "convert", path, written)[0] == 0
+    if target == "plain-named.yaml":  # libMultiRobotPlanning YAML under a plain name: told by its fields
+        written = written.rename(tmp_path / target)
+    code, out, _ = cli(capsys, "solve", written, "-m", "cbs", "-o", tmp_path / "s.yaml")
+    assert code == 0 and out.startswith("cbs: optimal (sum of costs)")
+    soc = solve(inst, "cbs").stats["sum_of_costs"]
+    assert f"sum of costs {soc}," in out
+    assert cli(capsys, "check", written, tmp_path / "s.yaml")[0] == 0
+    assert validate(inst, load_schedule(tmp_path / "s.yaml")).valid
+
+
+def test_a_bound_proved_short_of_the_optimum_is_printed_with_the_schedule(mapf, capsys, tmp_path):
+    inst, path = mapf
+    code, out, _ = cli(capsys, "solve", path, "-m", "cbs", "-O", "w=3", "-O", "heuristic=none")
+    assert code == 0 and out.startswith("cbs: feasible")
+    proved = int(out.split("sum of costs >= ")[1].split(" ")[0])
+    shown = int(out.split("sum of costs ")[1].split(",")[0])
+    assert proved <= solve(inst, "cbs").stats["sum_of_costs"] <= shown <= 3 * proved

@@ -15,8 +15,35 @@ EXIT_OK, EXIT_NO, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
 
 
 def instance_arg(arg: str, *, check: bool = True):
-    """An instance from a file or a bundled name."""
-    return load_instance(resolve(arg, InstanceError), check=check)
+    """An instance from a file or a bundled name: bille YAML, libMultiRobotPlanning YAML (named
+    ``*.mrp.yaml``, or recognized by its ``map`` and ``agents``) or a MovingAI ``.scen`` (every
+    agent of it, on the ``.map`` it names)."""
+    from bille.instances.interop import from_mrp, is_mrp, mrp_name
+    from bille.instances.yamlsource import load_yaml_file
+
+    path = resolve(arg, InstanceError)
+    if path.suffix == ".scen":
+        from bille.instances.generators.movingai import from_movingai, scen_map
+
+        return from_movingai(scen_map(path), path, agents=None, name=path.stem)
+    if not mrp_name(path):
+        try:
+            return load_instance(path, check=check)
+        except InstanceError:
+            if not is_mrp(_yaml_or_none(path)):
+                raise
+    data, src = load_yaml_file(path, InstanceError)
+    return from_mrp(data, path.name.split(".")[0], src)
+
+
+def _yaml_or_none(path: Path):
+    """The YAML data of ``path``, None if it cannot be read as YAML."""
+    from bille.instances.yamlsource import load_yaml_file
+
+    try:
+        return load_yaml_file(path, InstanceError)[0]
+    except InstanceError:
+        return None
 
 
 def schedule_arg(arg: str):
@@ -174,13 +201,19 @@ def shown_status(status: str, objective: str | None) -> str:
 
 
 def summary_line(label: str, result) -> str:
-    """One line: the status, the time, the schedule's metrics and the makespan lower bound (or
-    that none was computed)."""
+    """One line: the status, the time, the schedule's metrics (the sum of costs where robots have
+    goal cells), the sum-of-costs bound a method proved short of an optimum, and the makespan
+    lower bound (or that none was computed)."""
     m = result.metrics
     text = f"{label}: {status_text(result)} in {result.time_s:.3f} s"
     if m is not None:
         unproved = " (not minimized)" if result.stats.get("tiles_traveled_optimal") is False else ""
-        text += f"; makespan {m.makespan}, tiles traveled {m.tiles_traveled}{unproved}, waits {m.waits}"
+        soc = "" if m.sum_of_costs is None else f"sum of costs {m.sum_of_costs}, "
+        text += f"; {soc}makespan {m.makespan}, tiles traveled {m.tiles_traveled}{unproved}, waits {m.waits}"
+    proved = result.stats.get("lower_bound_sum_of_costs")
+    if proved is not None and result.status != "optimal":
+        walking = " over walking-only schedules" if "walking only" in (result.stats.get("objective") or "") else ""
+        text += f"; sum of costs >= {proved}{walking} (proved)"
     if result.lower_bound is not None:
         text += f"; makespan lower bound {result.lower_bound}"
     elif result.status != "infeasible":
