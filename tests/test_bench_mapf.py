@@ -60,10 +60,10 @@ def test_peer_schedules_are_checked_by_the_validator():
     clash = [plan[0], [plan[0][0], plan[0][0]]]  # robot 1 jumps onto robot 0
     assert checked(inst, clash)["status"] == "invalid"
     assert checked(inst, [plan[0][::-1]] + plan[1:])["status"] == "other agents"
-    rows = [dict(map="room", agents=2, status="feasible", time_s=1.0, soc=good["soc"],
+    rows = [dict(map="room", agents=2, status="feasible", time_s=1.0, first_s=1.0, scatter_s=0.25, soc=good["soc"],
                  peers={"lacam3": {"status": "feasible", "time_s": 0.5, "soc": good["soc"]}})]
     lines = peers_table(rows, ["lacam3"])
-    assert "2.00x" in lines[2] and "1.000" in lines[2] and "bille 2, lacam3 2" in lines[-2]
+    assert "2.00x" in lines[2] and "1.000" in lines[2] and "25 %" in lines[2] and "bille 2, lacam3 2" in lines[-2]
 
 
 def test_bench_scale_measures_lacam_against_the_static_bound(capsys):

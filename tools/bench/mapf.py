@@ -89,7 +89,8 @@ def mapf_rows(folder: Path, maps=MAPS, agents=AGENTS, time_limit: float = 60.0, 
             # sum of loss: lacam3's objective, whose improvements lower the sum of costs
             result = solved(solve(inst, "lacam", objective="sum-of-loss", time_limit=time_limit, improve=improve))
             row = dict(map=name, agents=k, status=result.status, time_s=result.time_s,
-                       first_s=result.stats.get("first_s"), lower=lower_soc(inst), peers={})
+                       first_s=result.stats.get("first_s"), scatter_s=result.stats.get("scatter_s"),
+                       lower=lower_soc(inst), peers={})
             if result.schedule is not None:
                 row.update(soc=sum_of_costs(inst, result.schedule), makespan=result.metrics.makespan)
             if peers and "lacam3" in peers:

@@ -127,7 +127,8 @@ LARGEST_S = 30.0  # "solved" for the largest agent count: a first schedule withi
 
 
 def peers_table(rows: list[dict], names: list[str]) -> list[str]:
-    """Per map and agent count: bille's time and sum of costs, and per peer the ratios bille /
+    """Per map and agent count: bille's time, sum of costs and the share of its first schedule's
+    time spent on the SUO paths (:mod:`bille.heuristics.scatter`), and per peer the ratios bille /
     peer of time and of sum of costs (below 1: bille faster, or cheaper); then per map the largest
     agent count each solved within :data:`LARGEST_S`, and the geometric means of the ratios."""
     from math import exp, log
@@ -140,8 +141,10 @@ def peers_table(rows: list[dict], names: list[str]) -> list[str]:
         if r["status"] == "skipped":
             continue
         mine = "soc" in r
+        spread = r.get("scatter_s")
         line = [r["map"], str(r["agents"]), f"{r['time_s']:.2f}" if mine else r["status"],
-                str(r["soc"]) if mine else "-"]
+                str(r["soc"]) if mine else "-",
+                f"{100 * spread / r['first_s']:.0f} %" if mine and spread is not None and r.get("first_s") else "-"]
         best = largest.setdefault(r["map"], {})
         if mine and r["time_s"] <= LARGEST_S:
             best["bille"] = max(best.get("bille", 0), r["agents"])
@@ -159,7 +162,7 @@ def peers_table(rows: list[dict], names: list[str]) -> list[str]:
                 line += [f"{peer['time_s']:.2f}" if ok else peer.get("status", "-"),
                          str(peer["soc"]) if ok else "-", "-", "-"]
         table.append(line)
-    columns = ["map", "agents", "bille [s]", "bille SOC"]
+    columns = ["map", "agents", "bille [s]", "bille SOC", "scatter share"]
     for n in names:
         columns += [f"{n} [s]", f"{n} SOC", "time ratio", "SOC ratio"]
     lines = text_table(columns, table, right=set(columns[1:]))
