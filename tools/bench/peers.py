@@ -50,13 +50,13 @@ def available(folder: Path) -> dict[str, Path]:
 
 def run_lacam3(binary: Path, map_file: Path, scen: Path, agents: int, instance: Instance, *,
                seconds: int, anytime: bool) -> dict:
-    """lacam3 on the first ``agents`` rows of ``scen``: its first schedule (``--no-star``) or
-    its best after ``seconds`` (``anytime``); ``time_s`` as it reports it (planning, its
-    distance tables included)."""
+    """lacam3 on the first ``agents`` rows of ``scen``: its first schedule (``--no-star``, one
+    thread, as bille's) or its best after ``seconds`` (``anytime``); ``time_s`` as it reports it
+    (planning, its distance tables included)."""
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "result.txt"
         args = [str(binary), "-m", str(map_file), "-i", str(scen), "-N", str(agents), "-t", str(seconds),
-                "-o", str(out)] + ([] if anytime else ["--no-star"])
+                "-o", str(out)] + ([] if anytime else ["--no-star", "--no-multi-thread"])
         try:
             subprocess.run(args, capture_output=True, timeout=seconds + 30, check=False)
         except subprocess.TimeoutExpired:
