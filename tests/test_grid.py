@@ -46,11 +46,25 @@ def test_articulation_points_agree_with_networkx(s):
     assert got == expected
 
 
-@given(structures())
-def test_connectivity_agrees_with_networkx(s):
+@st.composite
+def larger(draw):
+    """A random tile mask on a grid of more than TINY_GRID cells (up to 12 x 12)."""
+    W, H = draw(st.integers(9, 12)), draw(st.integers(8, 12))
+    return W, H, np.array(draw(st.lists(st.booleans(), min_size=W * H, max_size=W * H)), dtype=bool)
+
+
+@given(st.one_of(structures(), larger(), polyominoes()), st.sampled_from([0, 10**9]))
+def test_connectivity_agrees_with_networkx(s, searched):
+    # both ways of telling it: the search here (nothing searched yet) and scipy's labelling
+    from bille.instances import grid
+
     W, H, tiles = s
     g = tile_graph(W, H, tiles)
-    assert is_connected(tiles, W, H) == (g.number_of_nodes() > 0 and nx.is_connected(g))
+    saved, grid._searched = grid._searched, searched
+    try:
+        assert is_connected(tiles, W, H) == (g.number_of_nodes() > 0 and nx.is_connected(g))
+    finally:
+        grid._searched = saved
 
 
 @given(structures(), st.integers(0, 63))
