@@ -1,10 +1,13 @@
 """Ctrl-C held back while C code runs.
 
 A ``KeyboardInterrupt`` that arrives inside a C extension is not always raised as one: python-sat's
-encoders and solvers install a SIGINT handler of their own and turn it into their own error
+encoders and solvers install a SIGINT handler of their own, which jumps out of the C++ code
 (``pycard.error: Caught keyboard interrupt``), and some numpy paths clear it. Inside
-:func:`held_back` SIGINT is blocked for this thread (so no C handler sees it) and, should it reach
-another thread, only recorded by Python; it is raised as an ordinary ``KeyboardInterrupt`` once the
+:func:`held_back` SIGINT is blocked for this thread and only recorded by Python, and python-sat is
+told it runs outside the main thread, so it installs no handler: a Ctrl-C sent to the process
+goes to another thread that does not block it (numpy's BLAS workers), and python-sat's handler,
+had it been installed, would jump from that thread into the main thread's stack (it crashed the
+process in about 1 run in 10). The Ctrl-C is raised as an ordinary ``KeyboardInterrupt`` once the
 block is done, at a point where Python code can unwind and keep what the run found. Outside the
 main thread (where Python delivers no signal) and where a handler other than Python's default one
 is installed, the block runs as it is. Threads that run solvers block SIGINT for good
@@ -13,6 +16,7 @@ is installed, the block runs as it is. Threads that run solvers block SIGINT for
 from __future__ import annotations
 
 import signal
+import sys
 import threading
 from contextlib import contextmanager
 from typing import Iterator
@@ -34,15 +38,26 @@ def held_back() -> Iterator[None]:
     caught: list[int] = []
     signal.signal(signal.SIGINT, lambda signum, frame: caught.append(signum))
     mask = signal.pthread_sigmask(signal.SIG_BLOCK, _SIGINT)
+    pysat = sys.modules.get("pysat._utils")
+    check = None if pysat is None else pysat.MainThread.__dict__["check"]
+    if check is not None:
+        pysat.MainThread.check = staticmethod(_not_main)
     try:
         yield
     finally:
         try:  # unblocked first: a Ctrl-C that waited is recorded, not raised in the middle of this
+            if check is not None:
+                pysat.MainThread.check = check
             signal.pthread_sigmask(signal.SIG_SETMASK, mask)
         finally:
             signal.signal(signal.SIGINT, signal.default_int_handler)
     if caught:
         raise KeyboardInterrupt
+
+
+def _not_main() -> bool:
+    """python-sat's test for the main thread, inside :func:`held_back` (module docstring)."""
+    return False
 
 
 def quiet_thread() -> None:
