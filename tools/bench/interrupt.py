@@ -53,6 +53,7 @@ def one_run(instance: str, method: str, time_limit: float, at: float) -> dict:
         took = None if sent is None else time.perf_counter() - sent
         row = dict(instance=instance, method=method, at=round(at, 2), code=proc.returncode,
                    after_s=None if took is None else round(took, 2), traceback="Traceback" in err,
+                   last_error=err.strip().splitlines()[-1] if "Traceback" in err else None,
                    written=out.is_file(), valid=None)
         if out.is_file():
             try:
@@ -83,4 +84,6 @@ def table(rows: list[dict]) -> list[str]:
                f"{sum(r['code'] == 130 for r in stopped)} exit 130, "
                f"{sum(r['valid'] is False for r in rows)} invalid schedules; slowest exit "
                f"{max((r['after_s'] for r in stopped), default=0):.2f} s after the signal")
+    out += [f"traceback of {r['instance']} {r['method']} (signal at {r['at']:.2f} s): {r['last_error']}"
+            for r in rows if r.get("last_error")]
     return out
