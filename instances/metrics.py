@@ -40,11 +40,20 @@ def action_kinds(instance: Instance, ids: np.ndarray) -> np.ndarray:
     return kinds
 
 
+def makespan(instance: Instance, ids: np.ndarray) -> int:
+    """The makespan of a bound schedule: its last step in which some robot does not wait."""
+    return _makespan(action_kinds(instance, ids))
+
+
+def _makespan(kinds: np.ndarray) -> int:
+    active = np.flatnonzero((kinds != int(Kind.WAIT)).any(axis=0))
+    return int(active[-1]) + 1 if len(active) else 0
+
+
 def metrics(instance: Instance, ids: np.ndarray) -> Metrics:
     """Metrics of a bound schedule (action ids ``int[m, L]``)."""
     kinds = action_kinds(instance, ids)
-    active = np.flatnonzero((kinds != int(Kind.WAIT)).any(axis=0))
-    makespan = int(active[-1]) + 1 if len(active) else 0
+    makespan = _makespan(kinds)
     kinds = kinds[:, :makespan]
     return Metrics(
         makespan=makespan,

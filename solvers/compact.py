@@ -16,7 +16,7 @@ import time
 import numpy as np
 
 from bille.instances import Instance
-from bille.instances.metrics import metrics
+from bille.instances.metrics import makespan
 from bille.instances.rules import State, Violation, apply, run
 
 
@@ -42,7 +42,7 @@ def compact(instance: Instance, ids: np.ndarray, time_limit: float | None = 1.0)
                         break
                     u -= 1
                     moved = True
-    return ids[:, :metrics(instance, ids).makespan]
+    return ids[:, :makespan(instance, ids)]
 
 
 def _earlier(world, states, ids, i, u, wait) -> bool:

@@ -15,7 +15,7 @@ import numpy as np
 
 from bille.heuristics import lacam, lacam_states, reconfigure, temporal_astar
 from bille.instances import Instance, OptionError
-from bille.instances.metrics import metrics
+from bille.instances.metrics import makespan as ids_makespan
 from bille.instances.schedule import Schedule, bind
 
 from .compact import compact
@@ -241,4 +241,4 @@ def _run(instance: Instance, how, limit: float, improve: bool):
 
 def makespan_of(instance: Instance, ids: np.ndarray) -> int:
     """The makespan of an action-id matrix (its last step in which some robot does not wait)."""
-    return metrics(instance, ids).makespan
+    return ids_makespan(instance, ids)
