@@ -173,6 +173,9 @@ def _downhill(walk: Walk, goal: Goal, pose: int) -> set[int]:
     cells: set[int] = set()
     dist = goal.dist
     while UNREACHABLE > dist[pose] > 0:
-        swept, pose = next((c, q) for _, q, c in walk.moves(pose) if dist[q] == dist[pose] - 1)
+        step = next(((c, q) for _, q, c in walk.moves(pose) if dist[q] == dist[pose] - 1), None)
+        if step is None:  # no move down from here (cannot happen with distances of this walk)
+            break
+        swept, pose = step
         cells |= swept
     return cells
