@@ -62,7 +62,10 @@ class Goals:
         """Bind every idle robot (no legs, no goal cell) that stands on a cell a busy robot needs
         (of its goal poses, or swept on one shortest walk to them) for a pose off those cells;
         whether one was. The loop's last resort when it goes round in circles: Temporal A*
-        moves a blocked robot up, but a robot with no goal only waits, wherever it stands."""
+        moves a blocked robot up, but a robot with no goal only waits, wherever it stands. With
+        parking every idle robot has a goal already: none is evicted."""
+        if self.parking:
+            return False
         needed: set[int] = set()
         for j in range(s.num_robots):
             goal = self.of(s, j)

@@ -35,19 +35,19 @@ def held_back() -> Iterator[None]:
             or signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
         yield
         return
+    main_thread = getattr(sys.modules.get("pysat._utils"), "MainThread", None)  # python-sat's test
+    check = None if main_thread is None else main_thread.__dict__.get("check")
     caught: list[int] = []
     signal.signal(signal.SIGINT, lambda signum, frame: caught.append(signum))
     mask = signal.pthread_sigmask(signal.SIG_BLOCK, _SIGINT)
-    pysat = sys.modules.get("pysat._utils")
-    check = None if pysat is None else pysat.MainThread.__dict__["check"]
     if check is not None:
-        pysat.MainThread.check = staticmethod(_not_main)
+        main_thread.check = staticmethod(_not_main)
     try:
         yield
     finally:
         try:  # unblocked first: a Ctrl-C that waited is recorded, not raised in the middle of this
             if check is not None:
-                pysat.MainThread.check = check
+                main_thread.check = check
             signal.pthread_sigmask(signal.SIG_SETMASK, mask)
         finally:
             signal.signal(signal.SIGINT, signal.default_int_handler)

@@ -6,8 +6,10 @@ which they could meet there: exponentially many nodes before one of them waits o
 one goes through first. This module finds it and proves it complete; :mod:`.search` decides when
 it is used.
 
-Set-up. A *corridor* ``C = v_1 .. v_k`` is a maximal chain of cells with exactly two neighbours
-each in both robots' walking graphs (moves to another cell), ``v_i`` next to ``v_(i+1)``; ``a`` is
+Set-up. The robots' moves can be undone (a move from ``u`` to ``v`` has one from ``v`` to ``u``;
+:mod:`.method` switches the split off otherwise), so a cell's neighbours are the cells it can move
+to and come from alike. A *corridor* ``C = v_1 .. v_k`` is a maximal chain of cells with exactly
+two neighbours each in both robots' walking graphs, ``v_i`` next to ``v_(i+1)``; ``a`` is
 ``v_1``'s other neighbour, ``b`` ``v_k``'s, ``a != b``, neither in ``C``. So ``C`` is entered and
 left only through ``a`` and ``b``. Neither robot starts in ``C``. Robot 1 is the one whose current
 path goes on to ``b``, robot 2 to ``a``. With ``d_r(x)`` robot ``r``'s walking distance from its
@@ -52,7 +54,8 @@ class Corridors:
         self._dist: dict[tuple[int, frozenset], list[int]] = {}
 
     def neighbours(self, k: int, p: int) -> list[int]:
-        return [q for _, q, _ in self.agents[k].moves(p) if q != p]
+        """The cells robot ``k`` can move to from ``p`` (each once: two actions may go alike)."""
+        return list(dict.fromkeys(q for _, q, _ in self.agents[k].moves(p) if q != p))
 
     def chain(self, k: int, v: int) -> tuple[frozenset, int, int, int] | None:
         """``(C, a, b, k)`` for the corridor through cell ``v`` of robot ``k``'s graph, or None."""

@@ -35,6 +35,17 @@ def _check_movesets(instance: Instance) -> None:
                                   "with such movesets)")
 
 
+def _reversible(instance: Instance) -> bool:
+    """Whether every robot is a point whose every move can be undone by another (a move by
+    ``(dx, dy)`` has one by ``(-dx, -dy)``): corridor reasoning's graph, where a corridor is
+    entered and left only at its ends (:mod:`.corridor`)."""
+    for ms in instance.movesets:
+        steps = {tuple(a.front) for a in ms.actions if a.kind == Kind.MOTION}
+        if ms.footprint != "point" or any((-dx, -dy) not in steps for dx, dy in steps):
+            return False
+    return True
+
+
 def _grid_steps(instance: Instance) -> bool:
     """Whether every robot is a point that moves one cell across or down at a time (rectangle
     reasoning's grid, :mod:`.rectangle`)."""
@@ -81,7 +92,7 @@ def plan(instance: Instance, *, objective: str = "sum-of-costs", w: float = 1.0,
     heuristic : ``wdg``, ``cg`` or ``none`` (sum of costs only).
     prioritize, bypass, target, rectangle, corridor : the improvements of :mod:`.search`
         (rectangle and corridor reasoning apply under classic collisions; rectangles to robots
-        that move one cell at a time).
+        that move one cell at a time, corridors to robots whose every move can be undone).
     time_limit : seconds; max_nodes : constraint-tree nodes expanded before giving up.
 
     On a map whose free cells are all tiles (no robot carrying) walking schedules are all the
@@ -116,8 +127,8 @@ def plan(instance: Instance, *, objective: str = "sum-of-costs", w: float = 1.0,
     def poll() -> bool:
         return deadline is not None and time.perf_counter() > deadline
 
-    settings = Settings(objective, heuristic, prioritize, bypass, target, rectangle, corridor, w, focal,
-                        max_nodes)
+    settings = Settings(objective, heuristic, prioritize, bypass, target, rectangle, corridor and _reversible(instance),
+                        w, focal, max_nodes)
     tree = Tree(agents, instance.collisions == "classic", settings, poll, stats,
                 instance.width if _grid_steps(instance) else None)
     try:
