@@ -45,3 +45,15 @@ def manipulations(inst, schedule) -> list[tuple[int, int, str, int]]:
                 out.append((t, i, "pick" if kind == Kind.PICK else "place", int(g.target[state.poses[i], ids[i, t]])))
         state = nxt
     return out
+
+
+def split_with_and_without(inst, kind: str, max_nodes: int):
+    """Where cbs makes a ``kind`` split (``rectangle``, ``corridor``) on ``inst``: its result,
+    checked optimal and valid, and the result with that reasoning switched off; else None."""
+    from bille.solvers import solve, validate
+
+    result = solve(inst, "cbs", time_limit=None, max_nodes=max_nodes)
+    if not result.stats.get("split", {}).get(kind):
+        return None
+    assert result.status == "optimal" and validate(inst, result.schedule).valid
+    return result, solve(inst, "cbs", time_limit=None, max_nodes=max_nodes, **{kind: False})

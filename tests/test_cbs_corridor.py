@@ -12,7 +12,7 @@ from bille.heuristics.cbs.lowlevel import search
 from bille.heuristics.cbs.method import agents_of
 from bille.heuristics.joint import JointProblem
 from bille.solvers import solve, validate
-from helpers import make
+from helpers import make, split_with_and_without
 from refsearch import optimal_soc
 
 MAPS = [  # 'T': tile, '#': obstacle; corridors of one to three cells, with and without a way round
@@ -84,12 +84,11 @@ def test_where_a_corridor_is_split_the_optimum_is_the_brute_forces():
     for drawing in MAPS:
         for seed in range(30):
             inst = instance(drawing, seed)
-            result = solve(inst, "cbs", time_limit=None, max_nodes=3000)
-            if not result.stats.get("split", {}).get("corridor"):
+            found = split_with_and_without(inst, "corridor", 3000)
+            if found is None:
                 continue
             used += 1
-            assert result.status == "optimal" and validate(inst, result.schedule).valid
-            plain = solve(inst, "cbs", corridor=False, time_limit=None, max_nodes=3000)
+            result, plain = found
             best = optimal_soc(inst)[0]
             assert result.stats["sum_of_costs"] == best, inst.name
             assert plain.status != "optimal" or plain.stats["sum_of_costs"] == result.stats["sum_of_costs"]

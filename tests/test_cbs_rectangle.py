@@ -7,8 +7,7 @@ import pytest
 
 from bille.heuristics.cbs.lowlevel import Path
 from bille.heuristics.cbs.rectangle import rectangle
-from bille.solvers import solve, validate
-from helpers import make
+from helpers import make, split_with_and_without
 from refsearch import optimal_soc
 
 STEPS = ((0, 0), (1, 0), (-1, 0), (0, 1), (0, -1))
@@ -117,12 +116,11 @@ def test_where_a_rectangle_is_split_the_optimum_is_the_brute_forces():
         inst = crossing(seed)
         if inst is None:
             continue
-        result = solve(inst, "cbs", time_limit=None, max_nodes=2000)
-        if not result.stats.get("split", {}).get("rectangle"):
+        found = split_with_and_without(inst, "rectangle", 2000)
+        if found is None:
             continue
         used += 1
-        assert result.status == "optimal" and validate(inst, result.schedule).valid
-        plain = solve(inst, "cbs", rectangle=False, time_limit=None, max_nodes=2000)
+        result, plain = found
         assert result.stats["sum_of_costs"] == plain.stats["sum_of_costs"] == optimal_soc(inst)[0], inst.name
         if used == 8:
             break

@@ -24,8 +24,8 @@ Both branches of each kind exclude the conflict of the current paths, so the sea
 from __future__ import annotations
 
 from .constraints import AFTER, CELL, EDGE, RANGE, VERTEX
-from .lowlevel import MDD, Agent, Path
 from .corridor import CORRIDOR
+from .lowlevel import MDD, Agent, Path
 from .rectangle import RECTANGLE
 
 CELLS, VERTEXC, EDGEC, TARGET = range(4)

@@ -19,6 +19,7 @@ import numpy as np
 
 from bille.instances import Grid, Instance, InstanceError, check_instance, load_moveset
 from bille.instances.generators.movingai import from_movingai
+from bille.instances.metrics import sum_of_costs as metrics_soc
 from bille.instances.schedule import bind
 from bille.instances.walking import walk_for
 from bille.solvers import solve
@@ -46,20 +47,8 @@ def map_names(folder: Path) -> list[str]:
 
 def sum_of_costs(instance: Instance, schedule) -> int:
     """Each robot's cost is the step after which it stands on its goal for good (0 if it never
-    leaves it); robots without a goal cost nothing."""
-    world, total = instance.world, 0
-    for i, row in enumerate(bind(instance, schedule)):
-        goal, g = instance.goal_cells[i], world.graphs[i]
-        if goal < 0:
-            continue
-        pose = instance.start_state.poses[i]
-        arrival = 0 if int(g.feet[pose, 0]) == goal else 1  # the step after which it stays there
-        for t, a in enumerate(row.tolist(), start=1):
-            pose = int(g.succ[pose, a])
-            if int(g.feet[pose, 0]) != goal:
-                arrival = t + 1
-        total += arrival
-    return total
+    leaves it); robots without a goal cost nothing (:func:`bille.instances.metrics.sum_of_costs`)."""
+    return metrics_soc(instance, bind(instance, schedule)) or 0
 
 
 def lower_soc(instance: Instance) -> int:
