@@ -9,7 +9,7 @@ schedule is over after step ``k``; a schedule over after ``k`` is over after ``k
     model = build(instance, L, Options(), min_done=1)
     with open_backend("minisat22", model, instance) as backend:
         done = [model.done[k] for k in range(1, L + 1)]
-        outcome = backend.solve(deadline=until, objective=Objective(done, maximize=True, chain=True,
+        outcome = backend.solve(budget=window_budget, objective=Objective(done, maximize=True, chain=True,
                                                                    at_most=L - 1))
 """
 from __future__ import annotations
@@ -17,6 +17,7 @@ from __future__ import annotations
 from typing import Callable
 
 from bille.instances import Instance
+from bille.instances.run import Budget
 
 from . import SAT, UNKNOWN, UNSAT
 from .connectivity import connectivity_cuts, separator_cuts
@@ -26,16 +27,16 @@ from .solution import tiles_at
 
 
 def open_backend(solver: str, model: Model, instance: Instance, *, connectivity: str = "eager", threads: int = 1,
-                 seed: int = 0, presolve: bool = False, deadline: float | None = None) -> Backend:
+                 seed: int = 0, presolve: bool = False, budget: Budget | None = None) -> Backend:
     """A back end for ``model`` (of ``instance``): ``solver`` is ``cpsat`` (with ``threads``
     workers, ``seed``, ``presolve``) or a python-sat solver of :data:`SAT_SOLVERS`.
     ``connectivity`` is the model's encoding (which cuts a broken solution gets). Loading the
-    model into CP-SAT raises :class:`~.model.OutOfTime` past ``deadline``."""
+    model into CP-SAT raises :class:`~.model.OutOfTime` once ``budget`` expires."""
     cuts = _cut_finder(model, instance, connectivity)
     if solver == "cpsat":
         from .cpsat import CpSatBackend
 
-        return CpSatBackend(model, cuts, threads=threads, seed=seed, presolve=presolve, deadline=deadline)
+        return CpSatBackend(model, cuts, threads=threads, seed=seed, presolve=presolve, budget=budget)
     if solver not in SAT_SOLVERS:
         raise ValueError(f"unknown solver {solver!r} (expected one of: {', '.join(SOLVERS)})")
     from .cnf import SatBackend

@@ -4,13 +4,11 @@ minimized by a descent: each assignment found, the next call asks for a lower co
 over the objective's variables, or one literal of a chain), until a call is refuted (the last
 assignment is optimal) or time runs out.
 
-Solving runs in conflict budgets and checks the clock between them; the solvers that can be
-interrupted (all but CaDiCaL) solve in a thread of their own and are interrupted at the deadline,
-or on Ctrl-C, by the thread that waits for them, since one budget can take seconds on a large
+Solving runs in conflict budgets and reads the run's budget between them; the solvers that can be
+interrupted (all but CaDiCaL) solve in a thread of their own and are interrupted when the budget
+expires (its time spent, or Ctrl-C), by the thread that watches it, since one budget can take seconds on a large
 model (under an address-space limit that leaves less than ``THREAD_ROOM``, the budgets alone)."""
 from __future__ import annotations
-
-import time
 
 from pysat.card import CardEnc, EncType, ITotalizer
 from pysat.solvers import Solver
@@ -70,11 +68,11 @@ class SatBackend(Backend):
     def close(self) -> None:
         self.solver.delete()
 
-    def solve(self, assumptions=(), deadline=None, objective=None, hint=None) -> Outcome:
+    def solve(self, assumptions=(), budget=None, objective=None, hint=None) -> Outcome:
         """:meth:`.Backend.solve`; an objective by the descent of the module docstring, from
         ``hint`` if given (it must be an assignment of this model under ``assumptions``)."""
         if objective is None:
-            return super().solve(assumptions, deadline)
+            return super().solve(assumptions, budget)
         best = None if hint is None else Outcome(SAT, list(hint))
         limit, cuts = objective.at_most, 0
         while True:
@@ -84,7 +82,7 @@ class SatBackend(Backend):
                     return Outcome(SAT, best.values, cuts)
                 limit = cost - 1
             bound = [] if limit is None else self._bound(objective, limit)
-            step = super().solve([*assumptions, *bound], deadline)
+            step = super().solve([*assumptions, *bound], budget)
             cuts += step.cuts
             if step.status != SAT:
                 status = SAT if step.status == UNSAT and best is not None else step.status
@@ -107,39 +105,39 @@ class SatBackend(Backend):
                 self.add_clauses(totalizer.cnf.clauses)
         return [-totalizer.rhs[cost]]
 
-    def _solve(self, assumptions, deadline, objective, hint) -> Outcome:
-        start = time.perf_counter()
+    def _solve(self, assumptions, budget, objective, hint) -> Outcome:
+        start = budget.now()
         self.stats["solves"] += 1
-        if self._stopped or (deadline is not None and start > deadline):
+        if self._stopped or budget.expired():
             return Outcome(UNKNOWN)
         try:
             if not self.interruptible or address_room() < THREAD_ROOM:
-                return self._budgets(assumptions, deadline, False)
+                return self._budgets(assumptions, budget, False)
             halt = []  # set when the solve is to end, whatever the clock says
 
             def interrupt() -> None:
                 halt.append(True)
                 self.solver.interrupt()
 
-            return interruptible(lambda: self._budgets(assumptions, deadline, True, halt), interrupt, deadline)
+            return interruptible(lambda: self._budgets(assumptions, budget, True, halt), interrupt, budget)
         finally:
             if self.interruptible:
                 self.solver.clear_interrupt()  # an interrupt that came after the last budget
-            self.stats["solve_s"] += time.perf_counter() - start
+            self.stats["solve_s"] += budget.now() - start
 
-    def _budgets(self, assumptions, deadline, expect_interrupt: bool, halt=()) -> Outcome:
-        """Solve in conflict budgets until an answer, the deadline, or a halt."""
+    def _budgets(self, assumptions, budget, expect_interrupt: bool, halt=()) -> Outcome:
+        """Solve in conflict budgets until an answer, the budget's end, or a halt."""
         while True:
             self.solver.conf_budget(BUDGET)
             before = self.solver.accum_stats().get("conflicts", 0)
-            with held_back():  # one conflict budget: Ctrl-C lands after it, as a KeyboardInterrupt
+            with held_back():  # one conflict budget: python-sat's own Ctrl-C handler stays out
                 result = self.solver.solve_limited(assumptions=assumptions, expect_interrupt=expect_interrupt)
             self.stats["conflicts"] += self.solver.accum_stats().get("conflicts", 0) - before
             if result is True:
                 return Outcome(SAT, self.solver.get_model())
             if result is False:
                 return Outcome(UNSAT)
-            if halt or self._stopped or (deadline is not None and time.perf_counter() > deadline):
+            if halt or self._stopped or budget.expired():
                 return Outcome(UNKNOWN)
 
 

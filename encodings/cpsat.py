@@ -5,9 +5,9 @@ objective's bound are constraints of one call (unit ``bool_or``, a linear constr
 a copy of the model; an objective is CP-SAT's own."""
 from __future__ import annotations
 
-import time
-
 from ortools.sat.python import cp_model
+
+from bille.instances.run import Budget
 
 from . import SAT, UNKNOWN, UNSAT
 from .interface import Backend, Objective, Outcome, interruptible
@@ -22,14 +22,14 @@ class CpSatBackend(Backend):
     """Solve a :class:`~.model.Model` with CP-SAT (:class:`~.interface.Backend`)."""
 
     def __init__(self, model: Model, cuts=None, threads: int = 1, seed: int = 0, presolve: bool = False,
-                 deadline: float | None = None) -> None:
+                 budget: Budget | None = None) -> None:
         super().__init__(model, cuts)
         self.threads, self.seed, self.presolve = threads, seed, presolve
         self.cp = cp_model.CpModel()
         proto = self.cp.proto
         for _ in range(model.num_vars):
             proto.variables.add().domain.extend((0, 1))
-        self._add(model.clauses, deadline)
+        self._add(model.clauses, budget)
         for group in model.exactly_one:
             proto.constraints.add().exactly_one.literals.extend(_lits(group))
         for group in model.at_most_one:
@@ -40,11 +40,11 @@ class CpSatBackend(Backend):
     def add_clauses(self, clauses) -> None:
         self._add(clauses, None)
 
-    def _add(self, clauses, deadline: float | None) -> None:
+    def _add(self, clauses, budget: Budget | None) -> None:
         constraints = self.cp.proto.constraints
         for k, c in enumerate(clauses):
             constraints.add().bool_or.literals.extend(_lits(c))
-            if deadline is not None and k % 20_000 == 0 and time.perf_counter() > deadline:
+            if budget is not None and k % 20_000 == 0 and budget.expired():
                 raise OutOfTime
 
     def size(self) -> dict:
@@ -56,7 +56,7 @@ class CpSatBackend(Backend):
         if presolve is not None:
             self.presolve = presolve
 
-    def _solve(self, assumptions, deadline, objective, hint) -> Outcome:
+    def _solve(self, assumptions, budget, objective, hint) -> Outcome:
         proto = self.cp.proto
         proto.clear_objective()
         proto.clear_solution_hint()
@@ -74,9 +74,9 @@ class CpSatBackend(Backend):
                 cp.proto.constraints.add().bool_or.literals.append(_lits([lit])[0])
             if objective is not None and objective.at_most is not None:
                 _bound(cp.proto, objective)
-        return self._run(cp, deadline, objective)
+        return self._run(cp, budget, objective)
 
-    def _run(self, cp: cp_model.CpModel, deadline: float | None, objective: Objective | None) -> Outcome:
+    def _run(self, cp: cp_model.CpModel, budget: Budget, objective: Objective | None) -> Outcome:
         solver = cp_model.CpSolver()
         self._solver = solver
         if self._stopped:
@@ -87,13 +87,14 @@ class CpSatBackend(Backend):
         # Ctrl-C is Python's to hear (:func:`~.interface.interruptible`): CP-SAT's own handler would
         # end the search as if time had run out, and leave no handler behind it in Python
         solver.parameters.catch_sigint_signal = False
-        if deadline is not None:
-            solver.parameters.max_time_in_seconds = max(0.01, deadline - time.perf_counter())
-        start = time.perf_counter()
-        status = interruptible(lambda: solver.solve(cp), solver.stop_search)
+        seconds = budget.seconds()
+        if seconds is not None:
+            solver.parameters.max_time_in_seconds = max(0.01, seconds)
+        start = budget.now()
+        status = interruptible(lambda: solver.solve(cp), solver.stop_search, budget)
         self.stats["solves"] += 1
         self.stats["conflicts"] += int(solver.num_conflicts)
-        self.stats["solve_s"] += time.perf_counter() - start
+        self.stats["solve_s"] += budget.now() - start
         if status in (cp_model.OPTIMAL, cp_model.FEASIBLE):
             proven = status == cp_model.OPTIMAL or objective is None
             return Outcome(SAT if proven else UNKNOWN, list(solver.response_proto.solution))

@@ -3,7 +3,7 @@ solvers of python-sat, :mod:`.cnf`), each a :class:`Backend` opened by
 :func:`~.backend.open_backend`.
 
 Each :meth:`Backend.solve` call takes assumptions (literals that hold for this call only), a
-deadline and an optional :class:`Objective`, and answers an :class:`Outcome`: a status, the
+budget (:class:`~bille.instances.run.Budget`) and an optional :class:`Objective`, and answers an :class:`Outcome`: a status, the
 assignment if one was found, and the connectivity cuts the call added. Clauses may be added
 between calls; what a solver learned stays with it.
 
@@ -12,20 +12,21 @@ leaves connectivity to cuts (``lazy``, ``cuts``), a solution that breaks it adds
 back end was opened with and the solver goes on, in :meth:`Backend.solve`, the one place that
 loop is written. A model with the eager encoding is checked all the same (it never needs a cut).
 
-A solver's call runs in a thread of its own (:func:`interruptible`), so that Ctrl-C stops it at
-once: the call is ended and ``KeyboardInterrupt`` goes on to the caller, which keeps what it has.
-CaDiCaL holds Python's lock while it solves and cannot be interrupted; it runs in conflict
-budgets, and Ctrl-C is heard between two of them.
+A solver's call runs in a thread of its own (:func:`interruptible`) while the caller watches the
+budget: when it expires (its time spent, or the run cancelled by Ctrl-C) the solver is stopped
+through its own interface and the call answers ``unknown``. CaDiCaL holds Python's lock while it
+solves and cannot be interrupted; it runs in conflict budgets, and the budget is read between
+two of them.
 """
 from __future__ import annotations
 
 import threading
-import time
 from dataclasses import dataclass, field, replace
 from typing import Callable, Sequence
 
 from bille.instances.interrupts import quiet_thread
 from bille.instances.limits import address_room
+from bille.instances.run import Budget, unlimited
 
 from .model import Model
 
@@ -37,6 +38,7 @@ SOLVERS = ("cpsat",) + SAT_SOLVERS  # every name open_backend takes
 # room under an address-space limit, starting one can fail, or hang in ``Thread.start`` when the
 # new thread dies before it says it has started
 THREAD_ROOM = 1 << 30
+WATCH_S = 0.05  # seconds between two looks at the budget while a solver runs: how late a Ctrl-C is heard
 
 
 @dataclass(frozen=True)
@@ -92,15 +94,14 @@ class Backend:
         self.model, self._cuts = model, cuts
         self.stats = {"conflicts": 0, "solves": 0, "solve_s": 0.0}
 
-    def solve(self, assumptions: Sequence[int] = (), deadline: float | None = None,
+    def solve(self, assumptions: Sequence[int] = (), budget: Budget | None = None,
               objective: Objective | None = None, hint: list[int] | None = None) -> Outcome:
-        """Solve under ``assumptions`` until ``deadline`` (a ``time.perf_counter()`` value, None:
-        no limit), optimizing ``objective`` if given; ``hint``: an assignment of this model to
+        """Solve under ``assumptions`` until ``budget`` expires (None: no limit), optimizing ``objective`` if given; ``hint``: an assignment of this model to
         start from (an earlier outcome's ``values``). Adds connectivity cuts until the
         assignment keeps the tiles connected (module docstring)."""
-        cuts = 0
+        cuts, budget = 0, budget or unlimited()
         while True:
-            outcome = self._solve(list(assumptions), deadline, objective, hint)
+            outcome = self._solve(list(assumptions), budget, objective, hint)
             if outcome.values is None or self._cuts is None:
                 break
             found = self._cuts(outcome.value)
@@ -110,7 +111,7 @@ class Backend:
             cuts += len(found)
         return replace(outcome, cuts=outcome.cuts + cuts)
 
-    def _solve(self, assumptions: list[int], deadline: float | None, objective: Objective | None,
+    def _solve(self, assumptions: list[int], budget: Budget, objective: Objective | None,
                hint: list[int] | None) -> Outcome:
         raise NotImplementedError
 
@@ -138,13 +139,13 @@ class Backend:
         self.close()
 
 
-def interruptible(work: Callable[[], Outcome], interrupt: Callable[[], None], deadline: float | None = None) -> Outcome:
-    """``work()``, a solver's call, run in a thread of its own while this one waits: Ctrl-C
-    (``KeyboardInterrupt``, which Python raises in the main thread only, and only between
-    bytecodes, never inside a solver's C++ call) is then heard at once. ``interrupt`` ends the
-    work early: on Ctrl-C (the work is waited for and the interrupt goes on) and at ``deadline``
-    if given (the work answers as it does when interrupted). With too little address space for
-    a thread (:data:`THREAD_ROOM`), the work runs in this thread."""
+def interruptible(work: Callable[[], Outcome], interrupt: Callable[[], None], budget: Budget) -> Outcome:
+    """``work()``, a solver's call, run in a thread of its own while this one watches ``budget``
+    (Python runs signal handlers in the main thread only, and only between bytecodes, never inside
+    a solver's C++ call). ``interrupt`` ends the work early when the budget expires (its time
+    spent or the run cancelled; the work answers as it does when interrupted), and on a
+    ``KeyboardInterrupt`` (the work is waited for and the interrupt goes on). With too little
+    address space for a thread (:data:`THREAD_ROOM`), the work runs in this thread."""
     if address_room() < THREAD_ROOM:
         return work()
     box: dict = {}
@@ -162,9 +163,10 @@ def interruptible(work: Callable[[], Outcome], interrupt: Callable[[], None], de
     thread = threading.Thread(target=run, name="solver", daemon=True)
     thread.start()
     try:
-        if deadline is not None and not done.wait(max(0.0, deadline - time.perf_counter())):
-            interrupt()
-        done.wait()
+        while not done.wait(min(WATCH_S, budget.left())):
+            if budget.expired():
+                interrupt()
+                done.wait()
     except BaseException:
         interrupt()
         thread.join()

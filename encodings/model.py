@@ -39,13 +39,13 @@ is lost (a shorter one is padded with waits, which keep every pose, load and til
 """
 from __future__ import annotations
 
-import time
 from collections import defaultdict
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from bille.instances import Instance
+from bille.instances.run import Budget
 from bille.instances.moveset import Kind
 
 from .connectivity import eager_connectivity
@@ -59,7 +59,7 @@ WAIT, MOTION, PICK, PLACE = (int(k) for k in (Kind.WAIT, Kind.MOTION, Kind.PICK,
 
 
 class OutOfTime(Exception):
-    """Building the model passed its deadline."""
+    """The budget expired while the model was built."""
 
 
 @dataclass(frozen=True)
@@ -126,22 +126,22 @@ class Model:
 
 
 def build(instance: Instance, T: int, options: Options = Options(), min_done: int | None = None,
-          deadline: float | None = None, end=None, swap: bool = False) -> Model:
+          budget: Budget | None = None, end=None, swap: bool = False) -> Model:
     """The model of ``instance`` with horizon ``T``. With ``min_done``, ``done[k]`` literals for
     ``k = min_done .. T`` are added for an incremental makespan search by assumptions. Raises
-    :class:`OutOfTime` if building passes ``deadline`` (a ``time.perf_counter()`` value).
+    :class:`OutOfTime` once ``budget`` expires while building (its time spent, or the run cancelled).
 
     With ``end`` (a :class:`~bille.instances.State`), every robot ends at ``T`` in exactly its pose
     and load in ``end`` (robot goal cells are then ignored); the tiles at ``T`` are the goal
     tiles as always. A window of a schedule re-solved this way fits back in its place. With
     ``swap``, interchangeable robots may end in one another's end states (:mod:`.ends`)."""
-    return _Builder(instance, T, options, deadline, end, swap).build(min_done)
+    return _Builder(instance, T, options, budget, end, swap).build(min_done)
 
 
 class _Builder:
-    def __init__(self, instance: Instance, T: int, options: Options, deadline: float | None = None,
+    def __init__(self, instance: Instance, T: int, options: Options, budget: Budget | None = None,
                  end=None, swap: bool = False) -> None:
-        self.deadline, self.end = deadline, end
+        self.budget, self.end = budget, end
         self.roles = end_roles(instance, swap and end is not None)
         if options.connectivity not in CONNECTIVITY:
             raise ValueError(f"connectivity must be one of {CONNECTIVITY}")
@@ -153,7 +153,7 @@ class _Builder:
         self.state = instance.start_state
 
     def tick(self) -> None:
-        if self.deadline is not None and time.perf_counter() > self.deadline:
+        if self.budget is not None and self.budget.expired():
             raise OutOfTime
 
     # ---- literals of fixed values ----------------------------------------------------------------

@@ -11,21 +11,20 @@ from __future__ import annotations
 
 import heapq
 import itertools
-import time
-
 from bille.instances import Instance, OptionError
+from bille.instances.run import Run
 
 from .joint import NO_WALK, OBJECTIVE, JointProblem, OutOfTime, to_result, unwind
 
 
-def plan(instance: Instance, *, epsilon: float = 1.0, time_limit: float | None = None,
+def plan(instance: Instance, *, epsilon: float = 1.0, run: Run | None = None,
          max_expansions: int = 5_000_000):
     """Joint A*: minimum sum of costs (then makespan) on a fixed structure.
 
     Parameters
     ----------
     epsilon : weight of the heuristic (>= 1); 1 gives optimal plans.
-    time_limit : seconds before giving up with status ``timeout``.
+    run : the run context; when its budget expires, status ``timeout`` (default: no limit).
     max_expansions : expansions before giving up with status ``unsolved``.
 
     A search that runs out of walking states says ``unsolved``, not ``infeasible``: a schedule
@@ -33,8 +32,7 @@ def plan(instance: Instance, *, epsilon: float = 1.0, time_limit: float | None =
     """
     if epsilon < 1:
         raise OptionError(f"astar: epsilon must be >= 1, got {epsilon}")
-    start_time = time.perf_counter()
-    deadline = None if time_limit is None else start_time + time_limit
+    budget = (run or Run.limited()).budget
     problem = JointProblem.of(instance, "astar")
     stats = {"objective": OBJECTIVE, "epsilon": epsilon, "expanded": 0, "generated": 0}
     if problem.unreachable():
@@ -66,10 +64,10 @@ def plan(instance: Instance, *, epsilon: float = 1.0, time_limit: float | None =
             stats["failure"] = "expansion cap"
             return to_result(instance, "astar", "unsolved", None, stats=stats)
         try:
-            if deadline is not None and time.perf_counter() > deadline:
+            if budget.expired():
                 raise OutOfTime
             options = [problem.moves(i, p) for i, p in enumerate(poses)]
-            for actions, nxt in problem.joint_moves(poses, options, deadline):
+            for actions, nxt in problem.joint_moves(poses, options, budget):
                 cost, new_debts = problem.transition(poses, debts, nxt)
                 child = (nxt, new_debts)
                 g = (g_soc + cost, g_t + 1)

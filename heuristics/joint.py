@@ -9,7 +9,6 @@ compared lexicographically ("ties broken by makespan").
 """
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass
 from typing import Iterator
 
@@ -18,6 +17,7 @@ import numpy as np
 from bille.instances import Instance, OptionError
 from bille.instances.limits import CHECK_EVERY, check_budget
 from bille.instances.result import Result
+from bille.instances.run import Budget
 from bille.instances.schedule import Schedule
 from bille.instances.walking import UNREACHABLE, Walk, walk_for
 
@@ -106,18 +106,18 @@ class JointProblem:
         return options if only is None else [m for m in options if m[1] == only][:1]
 
     def joint_moves(self, poses: Poses, options: list[list],
-                    deadline: float | None = None) -> Iterator[tuple[tuple[int, ...], Poses]]:
+                    budget: Budget | None = None) -> Iterator[tuple[tuple[int, ...], Poses]]:
         """Joint actions from per-robot move lists whose collision sets are pairwise disjoint
         (docs/rules.md, rule 3; rules 1, 2 and 4 hold for every walking move on a fixed structure).
-        Past ``deadline`` (looked at every :data:`CHECK_EVERY` joint actions: ten robots give
-        millions of them) raises :class:`OutOfTime`."""
+        Once ``budget`` expires (looked at every :data:`CHECK_EVERY` joint actions: ten robots
+        give millions of them) raises :class:`OutOfTime`."""
         moves = self._classic_moves(poses, options) if self.instance.collisions == "classic" \
             else self._disjoint_moves(options)
-        if deadline is None:
+        if budget is None:
             yield from moves
             return
         for n, move in enumerate(moves, 1):
-            if n % CHECK_EVERY == 0 and time.perf_counter() > deadline:
+            if n % CHECK_EVERY == 0 and budget.expired():
                 raise OutOfTime
             yield move
 

@@ -13,9 +13,9 @@ none is found at all, a carrying robot may put its tile down for a while (``drop
 from __future__ import annotations
 
 import random
-import time
 
 from bille.instances import Instance
+from bille.instances.run import Budget
 from bille.instances.walking import UNREACHABLE
 
 from . import lacam, mstar, pibt
@@ -52,10 +52,10 @@ class _JointPlan:
     def _dists(self, s: LoopState, walks: list, fixed: dict[int, int], goals: list) -> list:
         raise NotImplementedError
 
-    def _search(self, s: LoopState, problem: JointProblem, fixed: dict[int, int], deadline: float | None):
+    def _search(self, s: LoopState, problem: JointProblem, fixed: dict[int, int], budget: Budget):
         raise NotImplementedError
 
-    def step(self, s, fixed, goals, intents, deadline):
+    def step(self, s, fixed, goals, intents, budget):
         """The next joint action of the plan (planned again when the structure, the goals or the
         poses left it); manipulations replace waits where they fit."""
         poses = s.poses
@@ -66,7 +66,7 @@ class _JointPlan:
             # a goal out of reach for now (the structure is changing) does not hold the others up
             dists = [None if d is not None and d[p] >= UNREACHABLE else d for d, p in zip(dists, poses)]
             problem = JointProblem.towards(self.instance, walks, dists, poses)
-            status, steps = self._search(s, problem, fixed, deadline)
+            status, steps = self._search(s, problem, fixed, budget)
             self.stats["replans"] += 1
             if steps is None:
                 self.stats["joint_status"] = self.failure = status
@@ -85,11 +85,6 @@ class _JointPlan:
         return joint
 
 
-def _left(deadline: float | None) -> float | None:
-    """Seconds to give a search that must end by ``deadline`` (at least a tenth)."""
-    return None if deadline is None else max(0.1, deadline - time.perf_counter())
-
-
 class MStar(_JointPlan):
     """M* as the motion layer: a joint plan of at most ``max_expansions`` expansions per replan
     (a step that needs more ends the run)."""
@@ -104,8 +99,8 @@ class MStar(_JointPlan):
                 else walks[i].distances_to(("pose", s.poses[i]), lambda p=s.poses[i]: [p])
                 for i, g in enumerate(goals)]
 
-    def _search(self, s, problem, fixed, deadline):
-        status, steps, stats = mstar.joint_plan(problem, epsilon=self.epsilon, time_limit=_left(deadline),
+    def _search(self, s, problem, fixed, budget):
+        status, steps, stats = mstar.joint_plan(problem, epsilon=self.epsilon, budget=budget,
                                                 max_expansions=self.max_expansions)
         self.stats["expanded"] += stats["expanded"]
         return status, steps
@@ -134,12 +129,12 @@ class LaCAM(_JointPlan):
         self._escape = True  # out of the circle along a joint plan, now
         return False
 
-    def step(self, s, fixed, goals, intents, deadline):
+    def step(self, s, fixed, goals, intents, budget):
         self._free = not self._escape
         if self._free:
             self._plan = None  # a joint plan, when needed again, starts from here
             return self._pibt(s, fixed, goals, intents)
-        return super().step(s, fixed, goals, intents, deadline)
+        return super().step(s, fixed, goals, intents, budget)
 
     def stepped(self, s, fixed, goals, progress) -> None:
         if progress:
@@ -173,7 +168,7 @@ class LaCAM(_JointPlan):
     def _dists(self, s, walks, fixed, goals):  # a manipulating robot waits one step, then is free
         return [None if i in fixed or g is None else g.dist for i, g in enumerate(goals)]
 
-    def _search(self, s, problem, fixed, deadline):
+    def _search(self, s, problem, fixed, budget):
         """A plan that brings every robot to its goal at once; when none is found within
         ``max_nodes`` configurations (the goals may not all be held at once: one robot's goal
         pose stands where another must end), a plan for one robot alone while the others only
@@ -181,7 +176,7 @@ class LaCAM(_JointPlan):
         every replan). ``goals_dropped`` counts the goals set aside for such plans."""
         pinned = {i: s.walk(i).cells(problem.start[i], a) for i, a in fixed.items()}
         dists = [None if c < 0 else d for c, d in zip(problem.goals, problem.dists)]
-        status, steps, stats = lacam.joint_plan(problem, time_limit=_left(deadline), max_nodes=self.max_nodes,
+        status, steps, stats = lacam.joint_plan(problem, budget=budget, max_nodes=self.max_nodes,
                                                 pinned=pinned)
         self.stats["expanded"] += stats["nodes"]
         if steps is not None or status == "timeout":
@@ -192,7 +187,7 @@ class LaCAM(_JointPlan):
             self.stats["goals_dropped"] += len(movers) - 1
             alone = [d if k == i else None for k, d in enumerate(dists)]
             one = JointProblem.towards(self.instance, problem.walks, alone, problem.start)
-            status, steps, stats = lacam.joint_plan(one, time_limit=_left(deadline), max_nodes=15 * self.max_nodes,
+            status, steps, stats = lacam.joint_plan(one, budget=budget, max_nodes=15 * self.max_nodes,
                                                     pinned=pinned)
             self.stats["expanded"] += stats["nodes"]
             if steps is not None or status == "timeout":

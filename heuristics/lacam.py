@@ -28,11 +28,11 @@ estimate: the summed distances), both over walking schedules (no pick or place).
 from __future__ import annotations
 
 import random
-import time
 from collections import deque
 from dataclasses import dataclass, field
 
 from bille.instances import Instance, OptionError
+from bille.instances.run import Budget, Run, unlimited
 
 from .joint import NO_WALK, JointProblem, to_result
 from .pibt import Bille, Classic, next_priorities
@@ -62,7 +62,7 @@ class _Node:
     edges: dict = field(default_factory=dict)  # successor node -> (joint action, cost)
 
 
-def plan(instance: Instance, *, objective: str = "makespan", time_limit: float | None = None,
+def plan(instance: Instance, *, objective: str = "makespan", run: Run | None = None,
          improve: float = 1.0, max_nodes: int = 2_000_000, seed: int = 0):
     """LaCAM* on a fixed structure (the method ``lacam`` hands an instance that moves tiles to
     the reconfiguration loop with LaCAM* as its motion layer).
@@ -70,9 +70,10 @@ def plan(instance: Instance, *, objective: str = "makespan", time_limit: float |
     Parameters
     ----------
     objective : ``makespan`` or ``sum-of-loss`` (module docstring).
-    time_limit : seconds for the whole run; without a first schedule by then, status ``timeout``.
+    run : the run context; without a first schedule when its budget expires, status ``timeout``
+        (default: no limit).
     improve : seconds spent improving the first schedule (0: stop at the first one), within
-        ``time_limit``.
+        the run's budget.
     max_nodes : configurations stored before giving up (``unsolved``) or stopping the improvement.
     seed : the generator's tie-breaking (results are repeatable for a seed).
 
@@ -81,15 +82,16 @@ def plan(instance: Instance, *, objective: str = "makespan", time_limit: float |
     schedule that moves tiles out of the way and back is outside it).
     """
     problem = JointProblem.of(instance, "lacam")
-    status, steps, stats = joint_plan(problem, objective=objective, time_limit=time_limit, improve=improve,
+    status, steps, stats = joint_plan(problem, objective=objective, budget=(run or Run.limited()).budget, improve=improve,
                                       max_nodes=max_nodes, seed=seed)
     return to_result(instance, "lacam", status, steps, stats=stats)
 
 
-def joint_plan(problem: JointProblem, *, objective: str = "makespan", time_limit: float | None = None,
+def joint_plan(problem: JointProblem, *, objective: str = "makespan", budget: Budget | None = None,
                improve: float = 0.0, max_nodes: int = 2_000_000, seed: int = 0,
                pinned: dict[int, frozenset] | None = None) -> tuple[str, list | None, dict]:
-    """LaCAM* on any :class:`JointProblem`: ``(status, joint actions or None, stats)``.
+    """LaCAM* on any :class:`JointProblem` within ``budget`` (None: no limit): ``(status, joint
+    actions or None, stats)``.
 
     ``pinned``: robots that wait in the first step while holding the given cells (the
     reconfiguration loop's picks and places, which replace those waits); the search space is
@@ -98,14 +100,15 @@ def joint_plan(problem: JointProblem, *, objective: str = "makespan", time_limit
         raise OptionError(f"lacam: unknown objective '{objective}' (expected one of: {', '.join(OBJECTIVES)})")
     if improve < 0:
         raise OptionError(f"lacam: improve must be >= 0 seconds, got {improve}")
-    start = time.perf_counter()
+    budget = budget or unlimited()
+    start = budget.now()
     rng = random.Random(seed)
     space = PoseSpace(problem, objective, rng, pinned or {})
     stats = {"objective": f"{objective}, walking only (no pick or place)"}
     if space.classic and not pinned and all(c >= 0 for c in problem.goals):
-        space.spread(None if time_limit is None else start + SCATTER_SHARE * time_limit, seed)
-        stats["scatter_s"] = round(time.perf_counter() - start, 6)
-    status, steps, stats = search(space, rng, time_limit=time_limit, improve=improve, max_nodes=max_nodes,
+        space.spread(budget.share(SCATTER_SHARE), seed)
+        stats["scatter_s"] = round(budget.now() - start, 6)
+    status, steps, stats = search(space, rng, budget=budget, improve=improve, max_nodes=max_nodes,
                                   stats=stats, start=start)
     if status == "exhausted":
         stats["failure"] = NO_WALK
@@ -125,17 +128,17 @@ class PoseSpace:
         self.refining = False  # no refinement (:meth:`refine`) until the SUO paths are set
         self.generator = (Classic if self.classic else Bille)(problem, rng)
 
-    def spread(self, deadline: float | None, seed: int) -> None:
+    def spread(self, budget: Budget, seed: int) -> None:
         """Classic collisions: the generator prefers each robot's next cell on its SUO path
-        (:mod:`.scatter`), planned until ``deadline`` at the latest; and the search may
+        (:mod:`.scatter`), planned within ``budget``; and the search may
         refine its schedules (:meth:`refine`)."""
         problem = self.problem
         self.goal_poses = [int(w.goal_poses(c)[0]) for w, c in zip(problem.walks, problem.goals)]
         self.generator.prefer = scatter(self.generator.nbrs, problem.dist_lists, list(problem.start),
-                                        self.goal_poses, margin=SCATTER_MARGIN, deadline=deadline, seed=seed)
+                                        self.goal_poses, margin=SCATTER_MARGIN, budget=budget, seed=seed)
         self.refining = None
 
-    def refine(self, configs: list[Poses] | None, rng: random.Random, deadline: float | None) -> list[Poses] | None:
+    def refine(self, configs: list[Poses] | None, rng: random.Random, budget: Budget) -> list[Poses] | None:
         """One neighbourhood of :mod:`.refine` on the best schedule (``configs``, given when it
         changed since the last call): the improved configurations, or None."""
         goals = self.goal_poses
@@ -147,7 +150,7 @@ class PoseSpace:
                     end -= 1
                 paths.append([c[i] for c in configs[:end + 1]])
             self.refining = Paths(paths, len(self.generator.nbrs))
-        if not refine_once(self.refining, self.generator.nbrs, self.problem.dist_lists, goals, rng, deadline):
+        if not refine_once(self.refining, self.generator.nbrs, self.problem.dist_lists, goals, rng, budget):
             return None
         paths = self.refining.paths
         return [tuple(p[min(t, len(p) - 1)] for p in paths) for t in range(max(map(len, paths)))]
@@ -190,24 +193,25 @@ class PoseSpace:
         return sum(1 for home, p, q in zip(self.problem.home_lists, a, b) if not (p == q and home[q]))
 
 
-def search(space, rng: random.Random, *, time_limit: float | None = None, improve: float = 0.0,
+def search(space, rng: random.Random, *, budget: Budget | None = None, improve: float = 0.0,
            max_nodes: int = 2_000_000, stats: dict | None = None,
            start: float | None = None) -> tuple[str, list | None, dict]:
     """LaCAM* over any search ``space`` (:class:`PoseSpace`, or whole states in
     :mod:`.lacam_states`): ``(status, joint actions or None, stats)`` with status ``optimal``
     (the improvement exhausted the space), ``feasible``, ``timeout``, ``unsolved`` (node cap or
     an unreachable goal; ``stats["failure"]``) or ``exhausted`` (no goal in the whole space:
-    the caller says what that proves)."""
-    return _LaCAM(space, rng, time_limit, improve, max_nodes, stats or {}, start).run()
+    the caller says what that proves). ``budget`` None: no limit; ``start``: the budget's time
+    the run began (default: now)."""
+    return _LaCAM(space, rng, budget or unlimited(), improve, max_nodes, stats or {}, start).run()
 
 
 class _LaCAM:
-    def __init__(self, space, rng: random.Random, time_limit, improve, max_nodes, stats: dict,
+    def __init__(self, space, rng: random.Random, budget: Budget, improve, max_nodes, stats: dict,
                  start: float | None) -> None:
         self.space = space
         self.m = space.m
-        self.start = time.perf_counter() if start is None else start
-        self.deadline = None if time_limit is None else self.start + time_limit
+        self.budget = budget
+        self.start = budget.now() if start is None else start
         self.improve, self.max_nodes = improve, max_nodes
         self.rng = rng
         self.stats: dict = {**stats, "nodes": 0, "generated": 0, "improvements": []}
@@ -238,16 +242,16 @@ class _LaCAM:
         self.next_refine, self.refined = 0.0, None
         self.open: list[_Node] = [root]
         self.best: _Node | None = None
-        stop_at = self.deadline
+        stop = self.budget  # then, from the first schedule on, a child of it for the improvement
         exhausted = True
         while self.open:
-            if stop_at is not None and time.perf_counter() > stop_at:
+            if stop.expired():
                 exhausted = False
                 break
             if self.best is not None and self.rng.random() < RESTART:
                 self.open.append(root)  # lacam3's random insertion: search again from the start
-            if self.best is not None and refining is not False and time.perf_counter() >= self.next_refine:
-                self._refine(explored, stop_at)
+            if self.best is not None and refining is not False and stop.now() >= self.next_refine:
+                self._refine(explored, stop)
             node = self.open[-1]
             if self.best is not None and node.g + node.h >= self.best.g:
                 self.open.pop()
@@ -258,7 +262,7 @@ class _LaCAM:
                 if self.improve == 0:
                     exhausted = False
                     break
-                stop_at = self._improvement_deadline()
+                stop = self.budget.child(self.improve)
                 continue
             if not node.tree:
                 self.open.pop()
@@ -290,7 +294,7 @@ class _LaCAM:
                 node.edges.setdefault(known, (actions, cost))
                 self._rewire(node)
                 self.open.append(known)
-        self.stats["time_s"] = round(time.perf_counter() - self.start, 6)
+        self.stats["time_s"] = round(self.budget.now() - self.start, 6)
         if self.best is None:
             if "failure" in self.stats:
                 return "unsolved", None, self.stats
@@ -301,14 +305,15 @@ class _LaCAM:
         self.stats["cost"] = self.best.g
         return ("optimal" if exhausted else "feasible"), self._steps(self.best), self.stats
 
-    def _refine(self, explored: dict, deadline: float | None) -> None:
-        """One refinement of the best schedule (:meth:`PoseSpace.refine`), its configurations
-        added to the search as lacam3 does (known ones rewired); the search then runs as long."""
-        began = time.perf_counter()
+    def _refine(self, explored: dict, budget: Budget) -> None:
+        """One refinement of the best schedule (:meth:`PoseSpace.refine`, within ``budget``), its
+        configurations added to the search as lacam3 does (known ones rewired); the search then
+        runs as long."""
+        began = budget.now()
         changed = self.refined is not self.best
         configs = self._configs(self.best) if changed else None
         self.refined = self.best
-        plan = self.space.refine(configs, self.rng, deadline)
+        plan = self.space.refine(configs, self.rng, budget)
         if plan is not None:
             node = explored[plan[0]]
             for a, b in zip(plan, plan[1:]):
@@ -326,7 +331,7 @@ class _LaCAM:
                 self._found(node)
             self.refined = self.best
             self.stats["refined"] = self.stats.get("refined", 0) + 1
-        now = time.perf_counter()
+        now = budget.now()
         self.next_refine = now + (now - began) / REFINE_RATIO
 
     @staticmethod
@@ -337,16 +342,12 @@ class _LaCAM:
             node = node.parent
         return configs[::-1]
 
-    def _improvement_deadline(self) -> float:
-        end = time.perf_counter() + self.improve
-        return end if self.deadline is None else min(end, self.deadline)
-
     def _found(self, node: _Node) -> None:
         """A goal node: the best if cheaper than the best so far (whose cost a rewiring may have
         lowered in place: ``improvements`` records the costs as they were found)."""
         known = self.stats["improvements"]
         if self.best is None or node.g < known[-1][1]:
-            elapsed = round(time.perf_counter() - self.start, 6)
+            elapsed = round(self.budget.now() - self.start, 6)
             if self.best is None:
                 self.stats["first_s"], self.stats["first_cost"] = elapsed, node.g
             self.best = node

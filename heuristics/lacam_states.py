@@ -36,6 +36,7 @@ from bille.instances.distances import relaxed_for
 from bille.instances.grid import articulation_points
 from bille.instances.moveset import Kind
 from bille.instances.rules import State, apply, goal_violation
+from bille.instances.run import Run
 from bille.instances.successors import candidate_actions, collision_cells
 from bille.instances.walking import UNREACHABLE, walk_for
 
@@ -47,7 +48,7 @@ ROBOT_BYTES = 3_000  # stored per state and robot (node, key, candidate lists): 
 MEMORY = 400 << 20  # the states the search may keep, in bytes
 
 
-def plan(instance: Instance, *, time_limit: float | None = None, improve: float = 0.0,
+def plan(instance: Instance, *, run: Run | None = None, improve: float = 0.0,
          max_nodes: int = 2_000_000, seed: int = 0, method: str = "lacam"):
     """LaCAM* over whole states (module docstring); a :class:`~bille.instances.result.Result`.
 
@@ -61,7 +62,7 @@ def plan(instance: Instance, *, time_limit: float | None = None, improve: float 
     space = StateSpace(instance, rng)
     per_state = instance.width * instance.height + ROBOT_BYTES * max(1, instance.num_robots)
     cap = min(max_nodes, MEMORY // per_state)
-    status, steps, stats = search(space, rng, time_limit=time_limit, improve=improve, max_nodes=cap,
+    status, steps, stats = search(space, rng, budget=(run or Run.limited()).budget, improve=improve, max_nodes=cap,
                                   stats={"objective": "makespan", "search": "whole states"})
     if status == "exhausted":
         status = "infeasible"

@@ -1,7 +1,7 @@
 """Motion, step 5 of the reconfiguration loop (paper, Methods, "Temporal A*"): the motion layers.
 
 A motion layer plans the next joint action of the robots that do not manipulate this step,
-towards their goals (:mod:`.goals`), by the loop's deadline. Every layer has the shape of
+towards their goals (:mod:`.goals`), within the loop's budget. Every layer has the shape of
 :class:`Motion`, and :data:`MOTIONS` makes one by name:
 
 - ``temporal-astar`` (:class:`TemporalAStar`, the paper's): windows of ``H`` steps planned in
@@ -12,10 +12,10 @@ towards their goals (:mod:`.goals`), by the loop's deadline. Every layer has the
 """
 from __future__ import annotations
 
-import time
 from typing import Callable, Protocol
 
 from bille.instances import Instance
+from bille.instances.run import Budget
 
 from .goals import Goal
 from .joint_motion import LaCAM, MStar
@@ -42,11 +42,11 @@ class Motion(Protocol):
         """Begin a run on ``instance``, counting into ``stats``."""
 
     def step(self, s: LoopState, fixed: dict[int, int], goals: list[Goal | None],
-             intents: dict[int, frozenset], deadline: float | None) -> list[int] | None:
+             intents: dict[int, frozenset], budget: Budget) -> list[int] | None:
         """The next joint action from state ``s``: the robots of ``fixed`` make their
         manipulation (or wait), the others head for ``goals`` (None: free), a robot with an
-        intent waits while its manipulation's cells are made room for; planned by ``deadline``
-        (a ``time.perf_counter()`` value). None when there is none (:attr:`failure` says why)."""
+        intent waits while its manipulation's cells are made room for; planned within ``budget``
+        (the loop's). None when there is none (:attr:`failure` says why)."""
 
     def circle(self) -> bool:
         """The loop came back to a state it was in (``Q`` has just changed): True to plan the
@@ -76,13 +76,13 @@ class TemporalAStar:
     def start(self, instance: Instance, stats: dict) -> None:
         self.stats = stats
 
-    def step(self, s, fixed, goals, intents, deadline):
+    def step(self, s, fixed, goals, intents, budget):
         self.failure = None
         joint, blocked = self._window(s, fixed, goals, intents)
         for _ in range(len(s.Q)):
             if blocked is None:
                 break
-            if deadline is not None and time.perf_counter() > deadline:  # between replans too
+            if budget.expired():  # between replans too
                 self.failure = "timeout"
                 return None
             shift_up(s.Q, blocked)

@@ -24,16 +24,16 @@ from __future__ import annotations
 
 import heapq
 import itertools
-import time
 
 from bille.instances import Instance, OptionError
+from bille.instances.run import Budget, Run, unlimited
 
 from .joint import NO_WALK, OBJECTIVE, JointProblem, OutOfTime, to_result, unwind
 
 INF = (1 << 60, 0)
 
 
-def plan(instance: Instance, *, epsilon: float = 1.0, od: bool = True, time_limit: float | None = None,
+def plan(instance: Instance, *, epsilon: float = 1.0, od: bool = True, run: Run | None = None,
          max_expansions: int = 5_000_000):
     """M*: minimum sum of costs (then makespan) on a fixed structure (the method ``mstar`` hands
     an instance that moves tiles to the reconfiguration loop, :mod:`.reconfigure`, with M* as
@@ -43,26 +43,28 @@ def plan(instance: Instance, *, epsilon: float = 1.0, od: bool = True, time_limi
     ----------
     epsilon : inflation of the heuristic (>= 1); 1 gives optimal plans.
     od : expand coupled robots one at a time (operator decomposition).
-    time_limit : seconds before giving up with status ``timeout``.
+    run : the run context; when its budget expires, status ``timeout`` (default: no limit).
     max_expansions : expansions (of vertices and intermediate nodes) before ``unsolved``.
     """
     if epsilon < 1:
         raise OptionError(f"mstar: epsilon must be >= 1, got {epsilon}")
-    return _MStar(JointProblem.of(instance, "mstar"), epsilon, od, time_limit, max_expansions).run()
+    budget = (run or Run.limited()).budget
+    return _MStar(JointProblem.of(instance, "mstar"), epsilon, od, budget, max_expansions).run()
 
 
-def joint_plan(problem: JointProblem, *, epsilon: float = 1.0, od: bool = True, time_limit: float | None = None,
+def joint_plan(problem: JointProblem, *, epsilon: float = 1.0, od: bool = True, budget: Budget | None = None,
                max_expansions: int = 5_000_000) -> tuple[str, list | None, dict]:
-    """M* on any :class:`JointProblem`: ``(status, joint actions or None, stats)``."""
-    search = _MStar(problem, epsilon, od, time_limit, max_expansions)
+    """M* on any :class:`JointProblem` within ``budget`` (None: no limit): ``(status, joint
+    actions or None, stats)``."""
+    search = _MStar(problem, epsilon, od, budget or unlimited(), max_expansions)
     status, steps = search.search()
     return status, steps, search.stats
 
 
 class _MStar:
-    def __init__(self, problem: JointProblem, epsilon, od, time_limit, max_expansions):
+    def __init__(self, problem: JointProblem, epsilon, od, budget: Budget, max_expansions):
         self.instance, self.epsilon, self.od = problem.instance, epsilon, od
-        self.deadline = None if time_limit is None else time.perf_counter() + time_limit
+        self.budget = budget
         self.max_expansions = max_expansions
         self.problem = problem
         self.policy = [_policy(self.problem, i) for i in range(len(problem.walks))]
@@ -128,7 +130,7 @@ class _MStar:
         while self.frontier:
             *_, node = heapq.heappop(self.frontier)
             if node[0] == "od":  # a partial step: many of them per state with many coupled robots
-                if self.deadline is not None and time.perf_counter() > self.deadline:
+                if self.budget.expired():
                     stats["failure"] = "time limit"
                     return "timeout", None
                 self.expand_partial(node)
@@ -145,7 +147,7 @@ class _MStar:
                 stats["failure"] = "expansion cap"
                 return "unsolved", None
             try:
-                if self.deadline is not None and time.perf_counter() > self.deadline:
+                if self.budget.expired():
                     raise OutOfTime
                 self.expand(node)
             except OutOfTime:
@@ -164,7 +166,7 @@ class _MStar:
             self.backprop(key, psi)
         g_soc, g_t = self.g[key]
         if not self.od or len(coupled) <= 1:
-            for actions, nxt in problem.joint_moves(poses, options, self.deadline):
+            for actions, nxt in problem.joint_moves(poses, options, self.budget):
                 cost, new_debts = problem.transition(poses, debts, nxt)
                 self.reach(key, actions, nxt, new_debts, (g_soc + cost, g_t + 1))
             return

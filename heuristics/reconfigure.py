@@ -36,10 +36,9 @@ robots are going round in circles after spending the budget of priority shifts; 
 """
 from __future__ import annotations
 
-import time
-
 from bille.instances import Instance, OptionError
 from bille.instances.rules import State, apply
+from bille.instances.run import Budget, Run, unlimited
 
 from .allocation import Allocation
 from .goals import Goals
@@ -56,7 +55,7 @@ RESTORED = ("circle_shifts", "relays", "swaps")  # counts that a backtrack sets 
 
 
 def plan(instance: Instance, *, motion: str | Motion = "temporal-astar", load_transfer: bool = False,
-         d_tr: int = 5, epsilon: float = 1.0, horizon: int = 5, time_limit: float | None = None,
+         d_tr: int = 5, epsilon: float = 1.0, horizon: int = 5, run: Run | None = None,
          max_steps: int | None = None, max_shifts: int | None = None, priorities: list[int] | None = None,
          active: list[int] | None = None, method: str | None = None):
     """Run the reconfiguration loop (module docstring); returns a
@@ -69,12 +68,13 @@ def plan(instance: Instance, *, motion: str | Motion = "temporal-astar", load_tr
     (default: ten times the summed Manhattan carries plus ``W + H`` per job, at least 200);
     ``max_shifts``: priority shifts allowed when going round in circles (default ``4 m^2 + 4
     jobs``); ``active``: the robots that take jobs (default: all); the others only keep out of
-    the way, and one that carries a tile at the start still delivers it.
+    the way, and one that carries a tile at the start still delivers it; ``run``: the run
+    context (when its budget expires, status ``timeout``; default: no limit).
     """
     name = motion if isinstance(motion, str) else motion.name
     try:
         loop = Loop(instance, motion=motion, load_transfer=load_transfer, d_tr=d_tr, epsilon=epsilon,
-                    horizon=horizon, time_limit=time_limit, max_steps=max_steps, max_shifts=max_shifts,
+                    horizon=horizon, budget=(run or Run.limited()).budget, max_steps=max_steps, max_shifts=max_shifts,
                     priorities=priorities, active=active)
     except NoSequence as exc:  # the loop gives up before its first step
         return to_result(instance, method or name, "unsolved", None, stats={"failure": str(exc)})
@@ -96,7 +96,7 @@ class Loop:
     counts :attr:`stats`; :meth:`run` drives them (options as for :func:`plan`)."""
 
     def __init__(self, instance: Instance, *, motion: str | Motion = "temporal-astar", load_transfer: bool = False,
-                 d_tr: int = 5, epsilon: float = 1.0, horizon: int = 5, time_limit: float | None = None,
+                 d_tr: int = 5, epsilon: float = 1.0, horizon: int = 5, budget: Budget | None = None,
                  max_steps: int | None = None, max_shifts: int | None = None,
                  priorities: list[int] | None = None, active: list[int] | None = None) -> None:
         m = instance.num_robots
@@ -116,9 +116,8 @@ class Loop:
             raise OptionError(f"instance '{instance.name}' has no robots to move its tiles")
         active = _active(active, m, name)
         self.instance = instance
-        self.start_time = time.perf_counter()
-        self.deadline = None if time_limit is None else self.start_time + time_limit
-        self.s = LoopState.start(instance, sequence_of(instance, deadline=self.deadline), Q)
+        self.budget = budget or unlimited()
+        self.s = LoopState.start(instance, sequence_of(instance, budget=self.budget), Q)
         jobs = self.s.jobs
         w, h = instance.width, instance.height
         carries = sum(abs(j.place % w - j.pick % w) + abs(j.place // w - j.pick // w)
@@ -185,9 +184,9 @@ class Loop:
             s = self.s
             if len(s.steps) >= self.max_steps:
                 return stop("step bound")
-            if self.deadline is not None and time.perf_counter() > self.deadline:
+            if self.budget.expired():
                 return stop("time limit", status="timeout")
-            t0 = time.perf_counter()
+            t0 = self.budget.now()
             for robot, k in self.allocation.decide(s):
                 s.assign(robot, k)
             if self.transfer is not None:
@@ -214,7 +213,7 @@ class Loop:
             seen.add(key)
             fixed, intents = self.manipulation.decide(s)
             goals = self.goals.all(s)
-            joint = motion.step(s, fixed, goals, intents, self.deadline)
+            joint = motion.step(s, fixed, goals, intents, self.budget)
             if joint is None and motion.drops and motion.failure != "timeout":
                 fixed = self._drop()  # no plan gets a carrying robot on: it puts its tile down
                 if fixed:
@@ -225,7 +224,7 @@ class Loop:
             if joint is None:
                 return stop(f"{motion.label} found no joint plan ({motion.failure})",
                             status="timeout" if motion.failure == "timeout" else "unsolved")
-            step_times.append(time.perf_counter() - t0)
+            step_times.append(self.budget.now() - t0)
             nxt = apply(s.world, s.state, joint, step=len(s.steps) + 1)
             if not isinstance(nxt, State):  # the planners respect the rules; this is a bug
                 return stop(f"internal: {nxt}", status="error")

@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import heapq
 import random
-import time
 
+from bille.instances.run import Budget
 
 class Paths:
     """Every robot's path and who is where when: ``at[t * P + v]`` the robot at ``v`` at step
@@ -43,7 +43,7 @@ class Paths:
 
 
 def refine_once(paths: Paths, nbrs: list[list[int]], dists: list[list[int]], goals: list[int],
-                rng: random.Random, deadline: float | None) -> int:
+                rng: random.Random, budget: Budget | None) -> int:
     """One neighbourhood: up to 30 robots (at most a quarter) planned again; the saving in the
     sum of costs (0 when the old paths stay)."""
     m = len(goals)
@@ -56,7 +56,7 @@ def refine_once(paths: Paths, nbrs: list[list[int]], dists: list[list[int]], goa
     new_cost, done = 0, []
     for k, i in enumerate(chosen):
         rest = sum(dists[j][old[j][0]] for j in chosen[k + 1:])
-        path = _plan(paths, nbrs, dists[i], old[i][0], goals[i], old_cost - new_cost - rest, deadline)
+        path = _plan(paths, nbrs, dists[i], old[i][0], goals[i], old_cost - new_cost - rest, budget)
         if path is None:
             break
         paths.add(i, path)
@@ -71,9 +71,9 @@ def refine_once(paths: Paths, nbrs: list[list[int]], dists: list[list[int]], goa
     return 0
 
 
-def _plan(paths: Paths, nbrs, dist, start: int, goal: int, bound: int, deadline: float | None) -> list[int] | None:
+def _plan(paths: Paths, nbrs, dist, start: int, goal: int, bound: int, budget: Budget | None) -> list[int] | None:
     """Space-time A* from ``start`` to ``goal`` (resting there for good) in at most ``bound``
-    steps, around the robots of ``paths``; None if there is none (or past ``deadline``)."""
+    steps, around the robots of ``paths``; None if there is none (or once ``budget`` expires)."""
     P, at, rest = paths.P, paths.at, paths.rest
     passed = paths.times.get(goal)
     free_from = max(passed) + 1 if passed else 0  # the goal is passed by nobody from then on
@@ -97,7 +97,7 @@ def _plan(paths: Paths, nbrs, dist, start: int, goal: int, bound: int, deadline:
                 key = parent[key]
             return path[::-1]
         n += 1
-        if deadline is not None and n % 256 == 0 and time.perf_counter() > deadline:
+        if budget is not None and n % 256 == 0 and budget.expired():
             return None
         t1 = t + 1
         for u in nbrs[v] + [v]:

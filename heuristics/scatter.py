@@ -14,8 +14,8 @@ from __future__ import annotations
 
 import heapq
 import random
-import time
 
+from bille.instances.run import Budget
 
 NEVER = 1 << 30  # no path ends on the cell
 
@@ -97,10 +97,10 @@ class CollisionTable:
 
 
 def scatter(nbrs: list[list[int]], dists: list[list[int]], starts: list[int], goals: list[int], *,
-            margin: int = 10, deadline: float | None = None, seed: int = 0, rounds_max: int = 100) -> list[dict[int, int]]:
+            margin: int = 10, budget: Budget | None = None, seed: int = 0, rounds_max: int = 100) -> list[dict[int, int]]:
     """Per robot, the next cell of its SUO path from each cell of that path (module docstring);
     robots on ``nbrs`` (the cells next to each cell) from ``starts`` to ``goals``, ``dists[i]``
-    robot ``i``'s distances to its goal. Stops at ``deadline`` with the paths of the last whole
+    robot ``i``'s distances to its goal. Stops when ``budget`` expires with the paths of the last whole
     round (or none)."""
     rng = random.Random(seed)
     m = len(starts)
@@ -115,7 +115,7 @@ def scatter(nbrs: list[list[int]], dists: list[list[int]], starts: list[int], go
         order = list(range(m))
         rng.shuffle(order)
         for i in order:
-            if deadline is not None and time.perf_counter() > deadline:
+            if budget is not None and budget.expired():
                 return _successors(kept)
             if paths[i] is not None:
                 table.clear(i, paths[i])

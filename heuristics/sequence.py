@@ -17,7 +17,7 @@ to fill) comes last. A job can run when
 the pick is not an articulation point of the current tiles, the place touches what remains, and
 a robot can stand facing the pick and carry the tile to a pose facing the place on the current
 structure. A choice that leads to a state where nothing can run is undone (depth first, with a
-budget of dead ends). The pairs are chosen one at a time rather than by a minimum-cost matching
+number of dead ends). The pairs are chosen one at a time rather than by a minimum-cost matching
 fixed in advance, because the pairs of such a matching often cannot all run in any order.
 
 When that finds nothing, a second search allows *temporary placements*: a job may take any tile
@@ -28,8 +28,8 @@ still to empty; within a tile set, the jobs from the cells to empty to the cells
 first (in the order above), then the others (tiles that cut a robot off from other work first,
 then the shortest carries). It is complete over sequences of one-robot
 jobs: when it has visited every tile set those jobs reach, none ends in the goal, and the
-loop says ``unsolved`` with that reason; otherwise it stops at its budget of tile sets or at
-the deadline.
+loop says ``unsolved`` with that reason; otherwise it stops at its cap of tile sets or when
+the run's budget expires.
 
 Deliveries go first, each to the nearest fill cell (from the carrier's front foot) that touches
 the structure.
@@ -37,13 +37,13 @@ the structure.
 from __future__ import annotations
 
 import heapq
-import time
 from dataclasses import dataclass
 
 import numpy as np
 
 from bille.instances import Instance, InstanceError
 from bille.instances.grid import articulation_points, is_connected, neighbour_table
+from bille.instances.run import Budget
 from bille.instances.walking import runnable, walk_for
 
 
@@ -72,11 +72,11 @@ class NoSequence(Exception):
     ``unsolved``); not a proof that none exists, and not bad input."""
 
 
-def sequence_of(instance: Instance, *, deadline: float | None = None) -> list[Job]:
+def sequence_of(instance: Instance, *, budget: Budget | None = None) -> list[Job]:
     """The instance's ``tasks`` (checked) with deliveries first, or a derived sequence (searched
-    until ``deadline``, a ``time.perf_counter()`` value)."""
+    within ``budget``; None: no limit)."""
     if instance.tasks is None:
-        return derive(instance, deadline=deadline)
+        return derive(instance, budget=budget)
     w = instance.width
     tasks = [Job(t.pick[1] * w + t.pick[0], t.place[1] * w + t.place[0]) for t in instance.tasks]
     after = instance.start.tiles.copy()  # the tasks' end, ignoring errors (check() names them)
@@ -132,11 +132,11 @@ def check(instance: Instance, jobs: list[Job], *, given: bool = False) -> None:
                             f"(extra tiles at {extra}, missing at {missing})")
 
 
-def derive(instance: Instance, *, budget: int = 200, max_sets: int | None = None,
-           deadline: float | None = None) -> list[Job]:
+def derive(instance: Instance, *, dead_ends: int = 200, max_sets: int | None = None,
+           budget: Budget | None = None) -> list[Job]:
     """A valid sequence for ``instance`` (see the module docstring), or :class:`NoSequence`:
-    ``budget`` dead ends for the first search, ``max_sets`` tile sets for the one with temporary
-    placements (default :func:`max_tile_sets`), both until ``deadline``."""
+    ``dead_ends`` for the first search, ``max_sets`` tile sets for the one with temporary
+    placements (default :func:`max_tile_sets`), both within ``budget`` (None: no limit)."""
     w, h = instance.width, instance.height
     max_sets = max_tile_sets(w * h) if max_sets is None else max_sets
     start, goal = instance.start.tiles, instance.goal_tiles
@@ -147,10 +147,10 @@ def derive(instance: Instance, *, budget: int = 200, max_sets: int | None = None
     empty = sorted(np.flatnonzero(tiles & ~goal).tolist())
     fill = sorted(np.flatnonzero(goal & ~tiles).tolist())
     graph = instance.world.graphs[0]
-    order = _order(tiles, empty, fill, graph, w, h, budget)
+    order = _order(tiles, empty, fill, graph, w, h, dead_ends)
     if order is None:
         graphs = [g for g, _ in instance.world.groups]  # any robot type may serve a job
-        search = _Setting(tiles, goal, instance.start.obstacles, graphs, w, h, max_sets, deadline)
+        search = _Setting(tiles, goal, instance.start.obstacles, graphs, w, h, max_sets, budget)
         order = search.run()
         if order is None:
             raise NoSequence(search.why() + "; a task list given with the instance is used as it is")
@@ -205,9 +205,9 @@ def _carry(p: int, q: int, w: int) -> int:
 
 
 def _order(tiles: np.ndarray, empty: list[int], fill: list[int], graph, w: int, h: int,
-           budget: int) -> list | None:
+           dead_ends: int) -> list | None:
     """Depth first over (pick, place) pairs, the shortest runnable carry first; gives up after
-    ``budget`` dead ends."""
+    ``dead_ends``."""
     nbr = neighbour_table(w, h)
     dead = 0
 
@@ -219,7 +219,7 @@ def _order(tiles: np.ndarray, empty: list[int], fill: list[int], graph, w: int, 
         critical = _critical(tiles, empty, fill, graph)
         pairs = sorted((critical[p], _carry(p, q, w), p, q) for p in empty for q in fill if not cut[p])
         for *_, p, q in pairs:
-            if dead >= budget:
+            if dead >= dead_ends:
                 return None
             if not runnable(tiles, cut, p, q, nbr, graph, w, h):
                 continue
@@ -247,10 +247,10 @@ class _Setting:
     """The search with temporary placements (module docstring): best first over tile sets."""
 
     def __init__(self, tiles, goal, obstacles, graphs, w: int, h: int, max_sets: int,
-                 deadline: float | None) -> None:
+                 budget: Budget | None) -> None:
         self.start, self.goal, self.obstacles, self.w, self.h = tiles.copy(), goal, obstacles, w, h
         self.graphs, self.graph = graphs, graphs[0]  # critical picks: by the first robot's moveset
-        self.max_sets, self.deadline = max_sets, deadline
+        self.max_sets, self.budget = max_sets, budget
         self.nbr = neighbour_table(w, h)
         self.seen: set[bytes] = set()
         self.stopped: str | None = None
@@ -275,7 +275,7 @@ class _Setting:
         count = 0
         heap = [(self._h(start), 0, start, self._moves(start), [])]
         while heap:
-            if self.deadline is not None and time.perf_counter() > self.deadline:
+            if self.budget is not None and self.budget.expired():
                 self.stopped = "time"
                 return None
             f, order, tiles, moves, path = heapq.heappop(heap)

@@ -19,18 +19,17 @@ giving up is not a proof that no schedule exists.
 """
 from __future__ import annotations
 
-import time
-
 import numpy as np
 
 from bille.instances import Instance, OptionError
+from bille.instances.run import Run
 from bille.instances.rules import State, apply
 
 from .joint import JointProblem, to_result
 from .spacetime import reservation_step
 
 
-def plan(instance: Instance, *, epsilon: float = 1.0, horizon: int = 5, time_limit: float | None = None,
+def plan(instance: Instance, *, epsilon: float = 1.0, horizon: int = 5, run: Run | None = None,
          max_steps: int | None = None, max_shifts: int | None = None, shift_priorities: bool = True,
          priorities: list[int] | None = None):
     """Temporal A* on a fixed structure (the method ``temporal-astar`` hands an instance that
@@ -40,7 +39,7 @@ def plan(instance: Instance, *, epsilon: float = 1.0, horizon: int = 5, time_lim
     ----------
     epsilon : heuristic weight (>= 1) of each robot's window search.
     horizon : ``H``, the number of steps each robot plans ahead (>= 1).
-    time_limit : seconds before stopping with status ``timeout``.
+    run : the run context; when its budget expires, status ``timeout`` (default: no limit).
     max_steps : step bound (default: 4 x the robots' summed distances to their goals, at least 100).
     max_shifts : budget of priority shifts (default: 4 m^2 for m robots).
     shift_priorities : False keeps ``Q`` fixed (for comparison): a blocked robot then ends the run.
@@ -54,8 +53,7 @@ def plan(instance: Instance, *, epsilon: float = 1.0, horizon: int = 5, time_lim
     Q = list(range(m)) if priorities is None else list(priorities)
     if sorted(Q) != list(range(m)):
         raise OptionError(f"temporal-astar: priorities must order the robot ids 0..{m - 1}, got {priorities}")
-    start_time = time.perf_counter()
-    deadline = None if time_limit is None else start_time + time_limit
+    budget = (run or Run.limited()).budget
     problem = JointProblem.of(instance, "temporal-astar")
     stats = {"horizon": horizon, "epsilon": epsilon, "steps": 0, "priority_shifts": 0, "replans": 0,
              "expanded": 0, "plan_ms_mean": 0.0, "plan_ms_max": 0.0}
@@ -87,7 +85,7 @@ def plan(instance: Instance, *, epsilon: float = 1.0, horizon: int = 5, time_lim
     while not problem.is_goal(state.poses):
         if len(steps) >= max_steps:
             return stop("step bound")
-        if deadline is not None and time.perf_counter() > deadline:
+        if budget.expired():
             return stop("time limit")
         if (state.poses, tuple(Q)) in seen:  # going round in circles
             if not shift_priorities or stats["priority_shifts"] >= max_shifts:
@@ -98,21 +96,21 @@ def plan(instance: Instance, *, epsilon: float = 1.0, horizon: int = 5, time_lim
             continue
         seen.add((state.poses, tuple(Q)))
 
-        t0 = time.perf_counter()
+        t0 = budget.now()
         while True:  # plan the step; a blocked robot moves up in Q and the step is planned again
             first, blocked = _plan_step(problem, state.poses, Q, horizon, epsilon, dists, feet, stats)
             if blocked is None:
                 break
             if not shift_priorities or stats["priority_shifts"] >= max_shifts:
-                step_times.append(time.perf_counter() - t0)
+                step_times.append(budget.now() - t0)
                 return stop("deadlock")
-            if deadline is not None and time.perf_counter() > deadline:  # many robots: many replans
-                step_times.append(time.perf_counter() - t0)
+            if budget.expired():  # many robots: many replans
+                step_times.append(budget.now() - t0)
                 return stop("time limit")
             shift_up(Q, blocked)
             stats["priority_shifts"] += 1
             stats["replans"] += 1
-        step_times.append(time.perf_counter() - t0)
+        step_times.append(budget.now() - t0)
 
         nxt = apply(instance.world, state, first, step=len(steps) + 1)
         if not isinstance(nxt, State):  # cannot happen if the windows respect the reservations

@@ -1,4 +1,11 @@
-"""Ctrl-C held back while C code runs.
+"""Ctrl-C: a run cancelled, or held back while C code runs.
+
+Inside ``solve()`` (:func:`cancelling`) the first Ctrl-C only cancels the run's budget
+(:mod:`.run`): every search polls it and ends with what it holds, and no exception unwinds
+through anything. A second Ctrl-C raises ``KeyboardInterrupt`` as usual, for a user who wants out
+at once.
+
+Outside it, Ctrl-C is Python's ``KeyboardInterrupt``, and :func:`held_back` keeps it out of C code.
 
 A ``KeyboardInterrupt`` that arrives inside a C extension is not always raised as one: python-sat's
 encoders and solvers install a SIGINT handler of their own, which jumps out of the C++ code
@@ -31,28 +38,62 @@ def held_back() -> Iterator[None]:
     >>> with held_back():
     ...     pass
     """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    with _pysat_outside_main():
+        if signal.getsignal(signal.SIGINT) is not signal.default_int_handler:  # cancelling(), or the user's own
+            yield
+            return
+        caught: list[int] = []
+        signal.signal(signal.SIGINT, lambda signum, frame: caught.append(signum))
+        mask = signal.pthread_sigmask(signal.SIG_BLOCK, _SIGINT)
+        try:
+            yield
+        finally:
+            try:  # unblocked first: a Ctrl-C that waited is recorded, not raised in the middle of this
+                signal.pthread_sigmask(signal.SIG_SETMASK, mask)
+            finally:
+                signal.signal(signal.SIGINT, signal.default_int_handler)
+    if caught:
+        raise KeyboardInterrupt
+
+
+@contextmanager
+def cancelling(budget) -> Iterator[None]:
+    """Run the block with Ctrl-C cancelling ``budget`` (the first one) or raising
+    ``KeyboardInterrupt`` (the second), in the main thread where Python's default handler is
+    installed; elsewhere the block runs as it is. python-sat is told it runs outside the main
+    thread inside :func:`held_back`, so that it installs no handler of its own."""
     if threading.current_thread() is not threading.main_thread() \
             or signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
         yield
         return
-    main_thread = getattr(sys.modules.get("pysat._utils"), "MainThread", None)  # python-sat's test
+
+    def cancel(signum, frame) -> None:
+        if budget.cancelled:
+            raise KeyboardInterrupt
+        budget.cancel()
+
+    signal.signal(signal.SIGINT, cancel)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
+@contextmanager
+def _pysat_outside_main() -> Iterator[None]:
+    """python-sat's test for the main thread answers no in the block."""
+    main_thread = getattr(sys.modules.get("pysat._utils"), "MainThread", None)
     check = None if main_thread is None else main_thread.__dict__.get("check")
-    caught: list[int] = []
-    signal.signal(signal.SIGINT, lambda signum, frame: caught.append(signum))
-    mask = signal.pthread_sigmask(signal.SIG_BLOCK, _SIGINT)
     if check is not None:
         main_thread.check = staticmethod(_not_main)
     try:
         yield
     finally:
-        try:  # unblocked first: a Ctrl-C that waited is recorded, not raised in the middle of this
-            if check is not None:
-                main_thread.check = check
-            signal.pthread_sigmask(signal.SIG_SETMASK, mask)
-        finally:
-            signal.signal(signal.SIGINT, signal.default_int_handler)
-    if caught:
-        raise KeyboardInterrupt
+        if check is not None:
+            main_thread.check = check
 
 
 def _not_main() -> bool:

@@ -9,27 +9,28 @@ from __future__ import annotations
 
 import dataclasses as _dataclasses
 import inspect as _inspect
-import time as _time
 
 from bille.instances import Instance, OptionError
+from bille.instances.interrupts import cancelling as _cancelling
 from bille.instances.metrics import Metrics, metrics
 from bille.instances.result import STATUSES, Result
+from bille.instances.run import Budget, Events, Run
 from bille.instances.schedule import Schedule, bind, dump_schedule, load_schedule, save_schedule, schedule_from_text
 
 from .options import check_options
-from .registry import CLASSIC, METHODS
+from .registry import CLASSIC, DEFAULT_TIME_LIMIT, METHODS
 from .validate import Report, validate
 
-__all__ = ["Bounds", "CLASSIC", "METHODS", "Metrics", "OptionError", "Report", "Result", "STATUSES", "Schedule", "bind",
-           "dump_schedule", "load_schedule", "lower_bound", "metrics", "save_schedule", "schedule_from_text", "solve",
-           "validate"]
+__all__ = ["Bounds", "Budget", "CLASSIC", "METHODS", "Metrics", "OptionError", "Report", "Result", "Run", "STATUSES",
+           "Schedule", "bind", "dump_schedule", "load_schedule", "lower_bound", "metrics", "save_schedule",
+           "schedule_from_text", "solve", "validate"]
 
 
-_clock = _time.perf_counter  # the clock of solve()'s time limit (a test may replace it)
-_INTERNAL = ("bounds", "progress")  # handed to a method by solve(), never given as options
+_DEFAULT = object()  # time_limit not given: the method's default (registry.DEFAULT_TIME_LIMIT)
 
 
-def solve(instance: Instance, method: str = "auto", progress=None, *, bound: bool = False, **options) -> Result:
+def solve(instance: Instance, method: str = "auto", progress=None, *, bound: bool = False,
+          time_limit: float | None = _DEFAULT, budget: Budget | None = None, **options) -> Result:
     """Solve ``instance`` with ``method`` (a key of :data:`METHODS`; ``auto`` picks one by the
     instance, :mod:`.auto`).
 
@@ -41,19 +42,25 @@ def solve(instance: Instance, method: str = "auto", progress=None, *, bound: boo
     methods that search from it (those whose planning function takes ``bounds``: the exact and
     anytime methods), which get the time left; and, with ``bound=True``, after any other method
     (so it does not change the schedule found). Without it the result's ``lower_bound`` is the
-    method's own proof, or None. ``time_limit`` covers the whole call, the bound included: past
-    it the bound leaves out its slow part (the routing LP), and a method left no time does not
-    run (status ``timeout``).
+    method's own proof, or None. ``time_limit`` (seconds; None: no limit; by default 60 for
+    ``auto``, ``cbs`` and ``anytime`` and none for the others) covers the whole call, the bound
+    included: past it the bound leaves out its slow part (the routing LP), and a method left no
+    time does not run (status ``timeout``). ``budget``, if given, is the run's budget
+    (:class:`~bille.instances.run.Budget`: a caller's clock, or its own way to cancel the run);
+    the time limit is then a part of it.
 
     The returned schedule is validated here, once: a schedule that breaks a rule turns the result
     into status ``error`` (with the violation in ``stats``) instead of reaching the user. So does a
     contradiction between proofs: a lower bound above the makespan found, a schedule where a
     static argument proved that none exists, or ``optimal`` makespan without a matching proof.
 
-    Ctrl-C (``KeyboardInterrupt``) ends the call with status ``interrupted``: a method that holds
-    a schedule or a proved bound returns them itself; if it lets the interrupt through, the result
-    keeps the last schedule and the best bound it told (``on_schedule``, ``on_bound``, for the
-    methods that take them), and the static bound if it was computed.
+    Ctrl-C, in the main thread, cancels the run's budget (:mod:`bille.instances.interrupts`): the
+    method stops where it polls its budget, as when time runs out, and the call returns status
+    ``interrupted`` with the best schedule and bound found; nothing unwinds through a solver. So
+    does a cancel of ``budget`` from elsewhere. A second Ctrl-C (or a ``KeyboardInterrupt`` from
+    a callback) unwinds: the result then keeps the last schedule and the best bound the method
+    told (``on_schedule``, ``on_bound``, for the methods that take them), and the static bound if
+    it was computed.
 
     >>> from bille.instances import instance_from_text
     >>> inst = instance_from_text("grid: |\\n  TTT\\nmoveset: point\\nrobots: [{at: [0, 0]}]\\nrobot_goals: [[2, 0]]")
@@ -62,15 +69,26 @@ def solve(instance: Instance, method: str = "auto", progress=None, *, bound: boo
     """
     if method not in METHODS:
         raise OptionError(f"unknown method '{method}' (expected one of: {', '.join(METHODS)})")
-    plan = METHODS[method]
     if instance.collisions == "classic" and method not in CLASSIC:
         raise OptionError(f"instance '{instance.name}' uses classic collisions; {method} plans under the Bill-E "
                           f"rule only (classic: {', '.join(CLASSIC)})")
-    options = check_options(method, plan, options, internal=_INTERNAL)
-    accepted = _inspect.signature(plan).parameters
-    start = _clock()
-    limit = options.get("time_limit", accepted["time_limit"].default if "time_limit" in accepted else None)
-    deadline = None if limit is None else start + limit
+    whole = Budget() if budget is None else budget
+    with _cancelling(whole):  # from here on (the method's libraries are loaded next), Ctrl-C cancels
+        plan = METHODS[method]
+        limit = DEFAULT_TIME_LIMIT.get(method) if time_limit is _DEFAULT else time_limit
+        options = check_options(method, plan, {**options, "time_limit": limit})
+        del options["time_limit"]
+        budget = whole.child(limit)
+        result, bounds, bound_s = _run(instance, method, plan, _inspect.signature(plan).parameters, options, budget,
+                                       progress, bound)
+    if budget.cancelled and result.status in ("feasible", "timeout", "unsolved"):
+        result = _dataclasses.replace(result, status="interrupted")
+    return _checked(instance, method, result, bounds, bound_s, budget.elapsed())
+
+
+def _run(instance: Instance, method: str, plan, accepted, options: dict, budget: Budget, progress, bound: bool):
+    """The method's result, the static bound (or None) and the seconds it took: the body of
+    :func:`solve` under its Ctrl-C handler."""
     bounds, bound_s = None, None
     kept = _Kept()
     for name, keep in (("on_schedule", kept.schedule), ("on_bound", kept.bound)):
@@ -79,25 +97,26 @@ def solve(instance: Instance, method: str = "auto", progress=None, *, bound: boo
             options[name] = keep if given is None else _both(keep, given)
     try:
         if "bounds" in accepted:  # the method searches from the bound: first, and it gets the time left
-            bounds, bound_s = _static_bound(instance, deadline, start, progress)
+            bounds, bound_s = _static_bound(instance, budget, progress)
             options["bounds"] = bounds
-            if limit is not None and "time_limit" in accepted:
-                options["time_limit"] = limit - bound_s
         if progress is not None and "progress" in accepted:
             options["progress"] = progress
-        left = options.get("time_limit")
-        if left is not None and left <= 0:
+        if "run" in accepted:
+            options["run"] = Run(budget, Events(options.get("on_schedule"), options.get("on_bound"), progress))
+        if budget.cancelled:
+            result = Result(method, "interrupted", stats={"failure": "interrupted computing the lower bound"})
+        elif budget.expired():
             result = Result(method, "timeout", stats={"failure": "the time limit ran out computing the lower bound"})
         else:
             result = plan(instance, **options)
     except KeyboardInterrupt:  # the method let it through: what it told before is kept
         result = kept.result(instance, method)
-    if bound and bounds is None and result.status != "interrupted":  # after the method, in the time left
-        try:
-            bounds, bound_s = _static_bound(instance, deadline, _clock(), progress)
+    if bound and bounds is None and result.status != "interrupted" and not budget.cancelled:
+        try:  # after the method, in the time left
+            bounds, bound_s = _static_bound(instance, budget, progress)
         except KeyboardInterrupt:
             result = _dataclasses.replace(result, status="interrupted")
-    return _checked(instance, method, result, bounds, bound_s, _clock() - start)
+    return result, bounds, bound_s
 
 
 class _Kept:
@@ -124,16 +143,16 @@ def _both(first, second):
     return tell
 
 
-def _static_bound(instance: Instance, deadline: float | None, began: float, progress):
-    """The static bound, its slow part left out past the ``deadline`` (of :data:`_clock`), and
-    the seconds it took since ``began``; ``progress`` is told it."""
+def _static_bound(instance: Instance, budget: Budget, progress):
+    """The static bound, its slow part left out once ``budget`` expires, and the seconds it
+    took; ``progress`` is told it (with the seconds since the run began)."""
     from .bounds import lower_bound
 
-    bounds = lower_bound(instance, time_limit=None if deadline is None else deadline - _clock())
-    seconds = _clock() - began
+    began = budget.now()
+    bounds = lower_bound(instance, budget=budget)
     if progress is not None:
-        progress({"lower": bounds.lower, "best": None, "elapsed": seconds})
-    return bounds, seconds
+        progress({"lower": bounds.lower, "best": None, "elapsed": budget.elapsed()})
+    return bounds, budget.now() - began
 
 
 def __getattr__(name: str):

@@ -40,10 +40,11 @@ bound in turn, until they meet (``optimal``) or the time runs out (``feasible``,
 Robots subsets as neighbourhoods (fix the other robots' paths) cannot shorten a makespan unless the
 robots they leave out already finish early, so only time windows are searched.
 
-Ctrl-C (``KeyboardInterrupt``, also raised by a ``progress``, ``on_schedule`` or ``on_bound``
-callback) ends the run within a second or two with status ``interrupted``: the best schedule
-and the bound proved so far. The child process ignores the terminal's Ctrl-C and is stopped by
-the parent.
+Ctrl-C cancels the run's budget: every part ends as when time runs out, what the bound search's
+child sent is read, and ``solve()`` returns status ``interrupted`` with the best schedule and the
+bound proved so far, within a second or two. (A ``KeyboardInterrupt``, from a second Ctrl-C or a
+``progress``, ``on_schedule`` or ``on_bound`` callback, ends it with the same.) The child process
+ignores the terminal's Ctrl-C and is stopped by the parent.
 
 ``stats``: ``first`` (method, makespan, seconds), ``improvements`` ([seconds, makespan] for every
 shorter schedule), ``lower_bounds`` ([seconds, bound] for every rise), ``windows`` (tried,
@@ -55,7 +56,6 @@ seconds spent on each search.
 from __future__ import annotations
 
 import multiprocessing
-import time
 from typing import Callable
 
 import numpy as np
@@ -64,6 +64,7 @@ from bille.encodings.backend import SAT_SOLVERS, SOLVERS
 from bille.instances import Instance, OptionError
 from bille.instances.result import Result
 from bille.instances.rules import goal_violation
+from bille.instances.run import Budget, Run
 from bille.instances.schedule import Schedule
 
 from .bounds import Bounds, lower_bound
@@ -73,7 +74,7 @@ from .rise import FORK, Ahead, Background, Rise
 from .windows import Windows
 
 
-def plan(instance: Instance, *, time_limit: float = 60.0, window: int = 8, slice: float = 2.0,
+def plan(instance: Instance, *, run: Run | None = None, window: int = 8, slice: float = 2.0,
          parallel: bool = True, solver: str = "minisat22", bound_solver: str = "cpsat", swap: bool = True,
          incumbent: Schedule | None = None, bounds: Bounds | None = None, progress: Callable | None = None,
          on_schedule: Callable | None = None, on_bound: Callable | None = None) -> Result:
@@ -81,7 +82,8 @@ def plan(instance: Instance, *, time_limit: float = 60.0, window: int = 8, slice
 
     Parameters
     ----------
-    time_limit : seconds for the whole run (default 60).
+    run : the run context: its budget covers the whole run (``solve()`` gives 60 s unless told
+        otherwise; without one, no limit).
     window : the first window length of the neighbourhood search, in steps (default 8).
     slice : seconds the first window may take (each undecided window gives the next half as much
         again); without ``parallel``, also the seconds each search runs before the other takes its
@@ -110,14 +112,15 @@ def plan(instance: Instance, *, time_limit: float = 60.0, window: int = 8, slice
     for name, value in (("on_schedule", on_schedule), ("on_bound", on_bound)):
         if value is not None and not callable(value):
             raise OptionError(f"anytime: {name} must be a function, got {value!r}")
+    budget = (run or Run.limited()).budget.child()  # started now: the run's own clock
     bounds = bounds or lower_bound(instance)
-    bracket = Bracket(bounds.lower)
+    bracket = Bracket(bounds.lower, budget)
     report = None if progress is None else _reporter(bracket, progress)
     for tell, subscribers in ((report, bracket.on_schedule), (report, bracket.on_bound), (on_schedule,
                               bracket.on_schedule), (on_bound, bracket.on_bound)):
         if tell is not None:
             subscribers.append(tell)
-    search = _Anytime(instance, bracket, time_limit, window, slice, parallel, solver, bound_solver, swap, report)
+    search = _Anytime(instance, bracket, budget, window, slice, parallel, solver, bound_solver, swap, report)
     return search.run(bounds, incumbent)
 
 
@@ -132,22 +135,19 @@ def _reporter(bracket: Bracket, progress: Callable) -> Callable:
 class _Anytime:
     """One run: the bracket, the parts that narrow it, and the statistics."""
 
-    def __init__(self, instance, bracket, time_limit, window, slice_s, parallel, solver, bound_solver, swap,
+    def __init__(self, instance, bracket, budget: Budget, window, slice_s, parallel, solver, bound_solver, swap,
                  report) -> None:
         self.instance, self.bracket, self.slice = instance, bracket, slice_s
         self.parallel, self.bound_solver, self.report = parallel, bound_solver, report
-        self.end = bracket.start + time_limit
+        self.budget, self.total = budget, budget.left()  # the run's, and its seconds (inf: no limit)
         self.cut: list = []  # the first schedule's runs that ran out of their share
         # the free and the kept neighbourhood search, in turn after a slice that shortened nothing;
         # the kept one's windows twice as long
-        self.windows = [Windows(instance, bracket, solver, window, slice_s, swap, self.end),
-                        Windows(instance, bracket, solver, 2 * window, slice_s, swap, self.end, kept=True)]
+        self.windows = [Windows(instance, bracket, solver, window, slice_s, swap, budget),
+                        Windows(instance, bracket, solver, 2 * window, slice_s, swap, budget, kept=True)]
         self.stats = {"improvements": bracket.improvements, "lower_bounds": bracket.lower_bounds,
                       "windows": self.windows[0].counts, "kept_windows": self.windows[1].counts,
                       "bound_s": 0.0, "search_s": 0.0}
-
-    def left(self) -> float:
-        return self.end - time.perf_counter()
 
     def run(self, bounds: Bounds, given: Schedule | None) -> Result:
         inst, bracket = self.instance, self.bracket
@@ -161,43 +161,43 @@ class _Anytime:
         why = self._in_turns()
         background = why is None
         self.stats["bound_search"] = "child process" if background else f"in turns: {why}"
-        rise, ahead, seek, stopped = None, None, None, False
+        rise, ahead, seek, stopped, budget = None, None, None, False, self.budget
         try:
             if background:  # the bound search starts at once, beside the heuristics
-                rise = Background(inst, self.bound_solver, bracket, self.end)
-                ahead = Ahead(inst, self.bound_solver, bracket, rise, self.end)
+                rise = Background(inst, self.bound_solver, bracket, budget)
+                ahead = Ahead(inst, self.bound_solver, bracket, rise, budget)
                 self.stats["ahead"] = ahead.tried
             self._first(first)
-            rise = rise or Rise(inst, self.bound_solver, bracket, self.end)
-            seek = _Seek(inst, self.cut, bracket.start, self.end)
-            while not bracket.closed and self.left() > 0 and not seek.infeasible:
-                began = time.perf_counter()
-                rise.step(min(self.end, began + (0 if background else self.slice)))
-                self.stats["bound_s"] += time.perf_counter() - began
+            rise = rise or Rise(inst, self.bound_solver, bracket, budget)
+            seek = _Seek(inst, self.cut, budget, self.total)
+            while not bracket.closed and not budget.expired() and not seek.infeasible:
+                part = budget.child(0 if background else self.slice)
+                rise.step(part)
+                self.stats["bound_s"] += part.elapsed()
                 if bracket.best is None and not bracket.closed:
-                    began = time.perf_counter()
+                    began = budget.now()
                     found = seek.step()
-                    self.stats["seek_s"] = round(self.stats.get("seek_s", 0.0) + time.perf_counter() - began, 3)
+                    self.stats["seek_s"] = round(self.stats.get("seek_s", 0.0) + budget.now() - began, 3)
                     if found is not None:
                         self.start_from(found)
                     continue
                 if bracket.closed:
                     continue
-                began, makespan = time.perf_counter(), bracket.best.makespan
-                self.windows[0].step(min(self.end, began + self.slice))
+                part, makespan = budget.child(self.slice), bracket.best.makespan
+                self.windows[0].step(part)
                 if bracket.best.makespan == makespan:  # the search that shortened it last goes on
                     self.windows.reverse()
-                self.stats["search_s"] += time.perf_counter() - began
+                self.stats["search_s"] += part.elapsed()
                 if ahead is not None and self._stalled() and (pick := ahead.pick()) is not None:
-                    began = time.perf_counter()
+                    began = budget.now()
                     ahead.run(*pick)
-                    self.stats["bound_s"] += time.perf_counter() - began
-            rise.step(time.perf_counter())  # what the bound search sent while the last part ran
-        except KeyboardInterrupt:  # Ctrl-C, or a subscriber that raised it: keep what is held
+                    self.stats["bound_s"] += budget.now() - began
+            rise.step(budget.child(0))  # what the bound search sent while the last part ran
+        except KeyboardInterrupt:  # a second Ctrl-C, or a subscriber that raised it: keep what is held
             stopped = True
             if isinstance(rise, Background):  # the bounds the child proved and sent before it
                 try:
-                    rise.step(time.perf_counter())
+                    rise.step(budget.child(0))
                 except (KeyboardInterrupt, Exception):  # a message cut by the Ctrl-C: keep what was read
                     pass
         finally:
@@ -216,7 +216,7 @@ class _Anytime:
         """Whether the best schedule has not shortened for a tenth of the time limit (at least 5 s):
         then this process may help the bound search (:class:`.rise.Ahead`)."""
         since = self.bracket.elapsed() - self.bracket.improvements[-1][0]
-        return since >= max(5.0, 0.1 * (self.end - self.bracket.start))
+        return since >= max(5.0, 0.1 * self.total)
 
     def _in_turns(self) -> str | None:
         """Why the bound search takes turns with the rest instead of running in a child process
@@ -241,7 +241,8 @@ class _Anytime:
         return found
 
     def _first(self, given: Incumbent | None) -> None:
-        found = given or first_schedule(self.instance, max(0.01, min(10.0, 0.2 * self.left())), cut=self.cut)
+        seconds = max(0.01, min(10.0, 0.2 * self.budget.left()))
+        found = given or first_schedule(self.instance, self.budget.child(seconds), cut=self.cut)
         if found is not None:
             self.start_from(found)
         elif self.report is not None:
@@ -274,9 +275,9 @@ class _Seek:
     heavy-tailed (a few restarts would each stop short of where one long run gets), so it is not
     cut into restarts."""
 
-    def __init__(self, instance: Instance, cut: list, start: float, end: float) -> None:
-        self.instance, self.cut, self.end, self.infeasible = instance, cut, end, False
-        tenth = max(2.0, 0.1 * (end - start))
+    def __init__(self, instance: Instance, cut: list, budget: Budget, total: float) -> None:
+        self.instance, self.cut, self.budget, self.infeasible = instance, cut, budget, False
+        tenth = max(2.0, 0.1 * total)
         self.stages = [("fewer robots", 2 * tenth)]  # (stage, seconds), in turn
         self.stages += [("retry", 3 * tenth)] if cut else []
         self.stages += [("complete", tenth)]
@@ -284,7 +285,7 @@ class _Seek:
     def step(self) -> Incumbent | None:
         """The next stage; the schedule it found, or None."""
         stage, seconds = self.stages.pop(0) if self.stages else ("complete", float("inf"))
-        budget = max(0.01, min(seconds, self.end - time.perf_counter()))
+        budget = self.budget.child(max(0.01, min(seconds, self.budget.left())))
         if stage == "retry":
             return retry(self.instance, self.cut, budget)
         if stage == "fewer robots":

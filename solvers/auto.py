@@ -27,13 +27,13 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import time
 from typing import Callable
 
 import numpy as np
 
 from bille.instances import Instance
 from bille.instances.result import Result
+from bille.instances.run import Run
 
 SMALL = 500_000  # estimated joint states up to which the brute force goes first
 BFS_SHARE = 0.5  # of the time limit, at most, for the brute force before anytime takes over
@@ -53,24 +53,26 @@ def joint_states(instance: Instance) -> int:
     return poses * math.comb(free, min(free, moving + 1))
 
 
-def plan(instance: Instance, *, time_limit: float = 60.0, bounds=None, progress: Callable | None = None) -> Result:
+def plan(instance: Instance, *, run: Run | None = None, bounds=None, progress: Callable | None = None) -> Result:
     """The brute force with proof on a small joint state space, anytime solving otherwise
     (module docstring); ``stats.auto`` says which method ran and why.
 
     Parameters
     ----------
-    time_limit : seconds for the whole run (default 60).
+    run : the run context: its budget covers the whole run (``solve()`` gives 60 s unless told
+        otherwise; without one, no limit).
     bounds, progress : from ``solve()``: the static bound, handed on with what the brute force
         proved, and the progress callback of the anytime method.
     """
     from . import anytime, bfs, registry
 
-    start = time.perf_counter()
+    run = run or Run.limited()
+    budget = run.budget
     if instance.collisions == "classic" and not instance.is_reconfiguration:
-        return _classic(instance, time_limit)
+        return _classic(instance, run)
     size = joint_states(instance)
     if instance.collisions == "classic":  # a classic reconfiguration: the brute force is the method that moves tiles
-        found = bfs.plan(instance, time_limit=time_limit)
+        found = bfs.plan(instance, run=run)
         return _told(found, {"method": "bfs", "why": "classic collisions with tiles to move: the brute force, the "
                                                    "method that plans them"})
     fallback = "anytime"
@@ -78,38 +80,37 @@ def plan(instance: Instance, *, time_limit: float = 60.0, bounds=None, progress:
         chosen = {"method": fallback, "why": f"about {size:.1e} joint states, more than {SMALL:.0e}"}
         lower = None
     else:
-        share = BFS_SHARE * time_limit
-        found = bfs.plan(instance, time_limit=share)
+        part = budget.share(BFS_SHARE)
+        share = part.left()
+        found = bfs.plan(instance, run=run.part(part))
         why = f"about {size:,} joint states (at most {SMALL:,}): the brute force, with proof"
         if found.status not in ("timeout", "unsolved"):
             return _told(found, {"method": "bfs", "why": why})
         lower = found.lower_bound
         chosen = {"method": fallback, "why": f"{why}, ran out of its {share:.0f} s ({found.stats.get('failure')}, "
                                              f"optimum above {lower - 1} steps); {fallback} with the rest"}
-    left = max(0.01, time_limit - (time.perf_counter() - start))
     if fallback == "lacam":
-        result = registry.METHODS["lacam"](instance, time_limit=left)
+        result = registry.METHODS["lacam"](instance, run=run)
     else:
         if bounds is not None and lower is not None and lower > bounds.lower:
             bounds = dataclasses.replace(bounds, lower=lower, parts={**bounds.parts, "brute force": lower})
-        result = anytime.plan(instance, time_limit=left, bounds=bounds, progress=progress)
+        result = anytime.plan(instance, run=run, bounds=bounds, progress=progress)
     if lower is not None and result.status != "infeasible" and (result.lower_bound or 0) < lower:
         result = dataclasses.replace(result, lower_bound=lower)
     return _told(result, chosen)
 
 
-def _classic(instance: Instance, time_limit: float) -> Result:
+def _classic(instance: Instance, run: Run) -> Result:
     """Conflict-based search with its share of the time, LaCAM* with the rest (module docstring)."""
     from . import registry
 
-    start = time.perf_counter()
-    share = CBS_SHARE * time_limit
-    found = registry.METHODS["cbs"](instance, time_limit=share)
+    part = run.budget.share(CBS_SHARE)
+    share = part.left()
+    found = registry.METHODS["cbs"](instance, run=run.part(part))
     why = "classic MAPF: conflict-based search, optimal sum of costs with proof"
     if found.status not in ("timeout", "unsolved"):
         return _told(found, {"method": "cbs", "why": why})
-    left = max(0.01, time_limit - (time.perf_counter() - start))
-    result = registry.METHODS["lacam"](instance, time_limit=left)
+    result = registry.METHODS["lacam"](instance, run=run)
     proved = found.stats.get("lower_bound_sum_of_costs")
     if proved is not None:
         result = dataclasses.replace(result, stats={**result.stats, "lower_bound_sum_of_costs": proved})

@@ -7,7 +7,6 @@ tested against, not a planner.
 """
 from __future__ import annotations
 
-import time
 from itertools import product
 
 import numpy as np
@@ -16,17 +15,18 @@ from bille.instances import Instance, OptionError
 from bille.instances.limits import CHECK_EVERY
 from bille.instances.rules import State, apply, goal_violation
 from bille.instances.result import Result
+from bille.instances.run import Run
 from bille.instances.schedule import Schedule
 from bille.instances.successors import candidate_actions, disjoint_products
 
 
-def plan(instance: Instance, *, time_limit: float | None = None, max_steps: int = 64,
+def plan(instance: Instance, *, run: Run | None = None, max_steps: int = 64,
          max_states: int = 2_000_000) -> Result:
     """Optimal-makespan schedule by breadth-first search.
 
     Parameters
     ----------
-    time_limit : seconds before giving up (status ``timeout``), None for no limit.
+    run : the run context; when its budget expires: status ``timeout`` (default: no limit).
     max_steps : horizon cap; without a goal within it the status is ``unsolved`` with lower bound
         ``max_steps + 1``. ``infeasible`` means the whole reachable state space was exhausted.
     max_states : give up (status ``unsolved``) after storing this many states.
@@ -37,8 +37,7 @@ def plan(instance: Instance, *, time_limit: float | None = None, max_steps: int 
     """
     if max_steps < 0 or max_states < 1:
         raise OptionError("bfs: max_steps must be >= 0 and max_states >= 1")
-    start = time.perf_counter()
-    deadline = None if time_limit is None else start + time_limit
+    budget = (run or Run.limited()).budget.child()
     world = instance.world
     goal_tiles, goal_cells = instance.goal_tiles, instance.goal_cells
     root = instance.start_state
@@ -53,12 +52,12 @@ def plan(instance: Instance, *, time_limit: float | None = None, max_steps: int 
     def stopped() -> Result | None:
         """The run's end if out of time or states; every state within ``depth`` steps has been
         checked (the goal test of each level), so the optimum is larger than ``depth``."""
-        out_of_time = deadline is not None and time.perf_counter() > deadline
+        out_of_time = budget.expired()
         if not out_of_time and len(parent) <= max_states:
             return None
         return Result("bfs", "timeout" if out_of_time else "unsolved", lower_bound=depth + 1,
                       stats=stats("time limit" if out_of_time else "state cap"),
-                      time_s=time.perf_counter() - start)
+                      time_s=budget.elapsed())
 
     try:
         while frontier:
@@ -66,7 +65,7 @@ def plan(instance: Instance, *, time_limit: float | None = None, max_steps: int 
                 if goal_violation(world, s, goal_tiles, goal_cells, depth) is None:
                     schedule = _unwind(instance, parent, s)
                     return Result("bfs", "optimal", schedule, lower_bound=depth, stats=stats(),
-                                  time_s=time.perf_counter() - start)
+                                  time_s=budget.elapsed())
             if depth == max_steps:
                 truncated = True
                 break
@@ -90,11 +89,11 @@ def plan(instance: Instance, *, time_limit: float | None = None, max_steps: int 
             depth += 1
     except KeyboardInterrupt:  # every level above the one under way was checked: a proved bound
         return Result("bfs", "interrupted", lower_bound=depth, stats=stats("interrupted"),
-                      time_s=time.perf_counter() - start)
+                      time_s=budget.elapsed())
     if truncated:  # no goal within max_steps
         return Result("bfs", "unsolved", lower_bound=max_steps + 1, stats=stats("step bound"),
-                      time_s=time.perf_counter() - start)
-    return Result("bfs", "infeasible", stats=stats(), time_s=time.perf_counter() - start)
+                      time_s=budget.elapsed())
+    return Result("bfs", "infeasible", stats=stats(), time_s=budget.elapsed())
 
 
 def _unwind(instance: Instance, parent: dict, state: State) -> Schedule:

@@ -64,7 +64,6 @@ Checked against the brute-force search (``bille solve -m bfs``) on random tiny i
 """
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -75,6 +74,7 @@ from scipy.sparse.csgraph import dijkstra
 from bille.instances import Instance, PoseGraph
 from bille.instances.distances import INF, manipulates_ahead, relaxed_for
 from bille.instances.moveset import Kind
+from bille.instances.run import Budget
 
 from .routing import routing_bound
 
@@ -88,12 +88,11 @@ class Bounds:
     impossible: list[str]
 
 
-def lower_bound(instance: Instance, *, time_limit: float | None = None) -> Bounds:
+def lower_bound(instance: Instance, *, budget: Budget | None = None) -> Bounds:
     """The makespan lower bound of the module docstring, and static proofs of infeasibility.
 
-    ``time_limit`` (seconds) limits the linear program of the routing part, the one part that
-    can take long: past it, that part is left out (None)."""
-    deadline = None if time_limit is None else time.perf_counter() + time_limit
+    ``budget`` limits the linear program of the routing part, the one part that can take long:
+    once it has expired (time spent, or the run cancelled), that part is left out (None)."""
     world = instance.world
     state = instance.start_state
     start, goal = instance.start.tiles, instance.goal_tiles
@@ -133,7 +132,7 @@ def lower_bound(instance: Instance, *, time_limit: float | None = None) -> Bound
             impossible.append("the tiles that must go cannot all be carried to cells that must be filled")
         else:
             parts["carrying (matching)"] = -(-(carry + carried) // m)
-            parts["routing (LP)"] = routing_bound(instance, _by_target, deadline)
+            parts["routing (LP)"] = routing_bound(instance, _by_target, budget)
     lower = max([v for v in parts.values() if v is not None] + [0])
     return Bounds(lower, parts, impossible)
 

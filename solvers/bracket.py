@@ -6,9 +6,10 @@ may raise ``KeyboardInterrupt`` to stop the search: it then ends with what it ho
 """
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass, field
 from typing import Callable
+
+from bille.instances.run import Budget
 
 from .incumbent import Incumbent
 
@@ -16,10 +17,11 @@ from .incumbent import Incumbent
 @dataclass
 class Bracket:
     """``lower`` <= the optimal makespan <= ``best.makespan``. ``improvements`` and
-    ``lower_bounds`` list ``[seconds since start, value]`` of every change."""
+    ``lower_bounds`` list ``[seconds since start, value]`` of every change, read from ``budget``
+    (the run's; by default one without a limit, started with the bracket)."""
 
     lower: int
-    start: float = field(default_factory=time.perf_counter)
+    budget: Budget = field(default_factory=Budget)
     best: Incumbent | None = None
     improvements: list = field(default_factory=list)
     lower_bounds: list = field(default_factory=list)
@@ -32,7 +34,7 @@ class Bracket:
         return self.best is not None and self.lower >= self.best.makespan
 
     def elapsed(self) -> float:
-        return time.perf_counter() - self.start
+        return self.budget.elapsed()
 
     def offer(self, found: Incumbent) -> bool:
         """Keep ``found`` (a validated schedule) if it is shorter than the best; whether it was."""

@@ -11,28 +11,27 @@ wherever it is used.
 """
 from __future__ import annotations
 
-import time
 
 import numpy as np
 
 from bille.instances import Instance
 from bille.instances.metrics import makespan
+from bille.instances.run import Budget
 from bille.instances.rules import State, Violation, apply, run
 
 
-def compact(instance: Instance, ids: np.ndarray, time_limit: float | None = 1.0) -> np.ndarray:
+def compact(instance: Instance, ids: np.ndarray, budget: Budget | None = None) -> np.ndarray:
     """``ids`` (a valid schedule's action ids, ``int[m, T]``) with each action moved as early as
-    it can go (module docstring), trimmed of trailing waits; at most ``time_limit`` seconds (None:
-    until no action moves)."""
+    it can go (module docstring), trimmed of trailing waits; within ``budget`` (None, or a budget
+    without a time limit: until no action moves)."""
     world = instance.world
     ids = np.array(ids, dtype=np.int64, copy=True)
     wait = [g.wait for g in world.graphs]
     states: list[State] = [instance.start_state, *run(world, instance.start_state, ids)]
     if any(isinstance(s, Violation) for s in states):
         raise ValueError("compact: the schedule is not valid")
-    end = None if time_limit is None else time.perf_counter() + time_limit
     moved = True
-    while moved and (end is None or time.perf_counter() < end):
+    while moved and (budget is None or not budget.expired()):
         moved = False
         for t in range(1, ids.shape[1]):
             for i in range(ids.shape[0]):

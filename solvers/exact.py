@@ -16,8 +16,9 @@ with no schedule to go by), and it is returned (``feasible``) when time runs out
 
 Statuses: ``optimal`` (``stats.tiles_traveled_optimal`` says whether the second objective was
 proved too), ``feasible`` (time ran out; the incumbent, with the lower bound reached),
-``interrupted`` (Ctrl-C, or a ``progress`` callback that raised ``KeyboardInterrupt``: the best
-schedule so far, if any, with the lower bound reached),
+``interrupted`` (a second Ctrl-C, or a ``progress`` callback that raised ``KeyboardInterrupt``:
+the best schedule so far, if any, with the lower bound reached; a first Ctrl-C cancels the run's
+budget and ends it as time running out does, and ``solve()`` calls it ``interrupted``),
 ``infeasible`` (a static proof, or the complete planner exhausted the reachable states:
 ``stats.reason``), ``unsolved`` (no schedule up to the horizon cap), ``timeout`` (time ran out
 with no schedule; the lower bound says how far the search got).
@@ -32,6 +33,7 @@ from bille.encodings.backend import SAT_SOLVERS
 from bille.encodings.model import CONNECTIVITY, Options
 from bille.instances import Instance, OptionError
 from bille.instances.result import Result
+from bille.instances.run import Run
 from bille.instances.rules import goal_violation
 from bille.instances.schedule import Schedule
 
@@ -39,7 +41,7 @@ from .bounds import Bounds, lower_bound
 from .horizons import sequential
 from .incumbent import EXHAUSTED, to_cap
 from .lanes import parallel
-from .search import RESTRICTIONS, Clock, Job, Search
+from .search import RESTRICTIONS, Job, Search
 
 
 def default_cap(lower: int) -> int:
@@ -47,7 +49,7 @@ def default_cap(lower: int) -> int:
     return max(2 * lower, lower + 24)
 
 
-def plan_cpsat(instance: Instance, *, time_limit: float | None = None, threads: int = 1, seed: int = 0,
+def plan_cpsat(instance: Instance, *, run: Run | None = None, threads: int = 1, seed: int = 0,
                presolve: bool = False,
                max_makespan: int | None = None, connectivity: str = "eager", minimize_travel: bool = True,
                prune: bool = True, prune_tiles: bool = True, single_carry: bool = False, keep_structure: bool = False,
@@ -57,7 +59,7 @@ def plan_cpsat(instance: Instance, *, time_limit: float | None = None, threads: 
 
     Parameters
     ----------
-    time_limit : seconds for the whole search.
+    run : the run context (its budget covers the whole search; default: no limit).
     threads : CP-SAT workers (1 with a fixed seed is repeatable).
     presolve : CP-SAT's presolve for the makespan search; off by default: on these large
         Boolean models it costs more than it saves (``bille bench exact`` measures it). The
@@ -68,7 +70,7 @@ def plan_cpsat(instance: Instance, *, time_limit: float | None = None, threads: 
         or ``lazy`` (cuts on demand).
     minimize_travel : then minimize tiles traveled at the optimal makespan.
     travel_time : seconds for that minimization (default: half the time the makespan search took,
-        at least 1 s; within ``time_limit``); ``stats.tiles_traveled_optimal`` says whether it
+        at least 1 s; within the run's budget); ``stats.tiles_traveled_optimal`` says whether it
         was proved. ``stats.makespan_s`` is the time to the proved optimal makespan.
     prune : reachability and candidate-cell pruning (switch off to measure them).
     prune_tiles : the reachability in time with the tiles (:mod:`bille.encodings.reach`), part of
@@ -96,10 +98,10 @@ def plan_cpsat(instance: Instance, *, time_limit: float | None = None, threads: 
               threads=threads, seed=seed, presolve=presolve, first_horizon=first_horizon,
               minimize_travel=minimize_travel, travel_time=travel_time,
               restriction=_restriction(single_carry, keep_structure))
-    return run(job, instance, time_limit, max_makespan, incumbent, bounds, progress)
+    return makespan_search(job, instance, run, max_makespan, incumbent, bounds, progress)
 
 
-def plan_sat(instance: Instance, *, time_limit: float | None = None, max_makespan: int | None = None,
+def plan_sat(instance: Instance, *, run: Run | None = None, max_makespan: int | None = None,
              connectivity: str = "eager", minimize_travel: bool = True, prune: bool = True, prune_tiles: bool = True,
              single_carry: bool = False, keep_structure: bool = False, solver: str = "glucose42", chunk: int = 1,
              incumbent: Schedule | None = None, travel_time: float | None = None, bounds: Bounds | None = None,
@@ -119,29 +121,27 @@ def plan_sat(instance: Instance, *, time_limit: float | None = None, max_makespa
     job = Job("sat", solver, _options(prune, prune_tiles, connectivity, single_carry, keep_structure),
               incremental=True, chunk=chunk, minimize_travel=minimize_travel, travel_time=travel_time,
               restriction=_restriction(single_carry, keep_structure))
-    return run(job, instance, time_limit, max_makespan, incumbent, bounds, progress)
+    return makespan_search(job, instance, run, max_makespan, incumbent, bounds, progress)
 
 
-def run(job: Job, instance: Instance, time_limit: float | None, max_makespan: int | None,
+def makespan_search(job: Job, instance: Instance, run: Run | None, max_makespan: int | None,
         incumbent: Schedule | None, bounds: Bounds | None, progress: Callable | None) -> Result:
     """The makespan search ``job`` on ``instance`` (module docstring): the static and trivial
     answers, the incumbent, then the search over horizons (:func:`.lanes.parallel` with two or
     more threads and no ``first_horizon``, else :func:`.horizons.sequential`)."""
     method = job.method
-    if time_limit is not None and time_limit <= 0:
-        raise OptionError(f"{method}: the time limit must be positive, got {time_limit}")
     if job.options.connectivity not in CONNECTIVITY:
         raise OptionError(f"{method}: connectivity must be one of {', '.join(CONNECTIVITY)}, "
                           f"got {job.options.connectivity!r}")
     if job.threads < 1 or job.chunk < 1:
         raise OptionError(f"{method}: threads and chunk must be at least 1")
-    clock = Clock(time_limit)
+    budget = (run or Run.limited()).budget.child()  # started now: the search's own time
     bounds = bounds or lower_bound(instance)
     cap = default_cap(bounds.lower) if max_makespan is None else max_makespan
     if cap < bounds.lower:
         raise OptionError(f"{method}: the horizon cap {cap} is below the makespan lower bound "
                           f"{bounds.lower} ({_parts(bounds.parts)})")
-    search = Search(job, instance, clock, bounds, cap, progress)
+    search = Search(job, instance, budget, bounds, cap, progress)
     if bounds.impossible:
         search.stats["reason"] = "; ".join(bounds.impossible)
         return search.result("infeasible")
@@ -168,7 +168,7 @@ def _find_incumbent(search: Search, given: Schedule | None, cap_given: bool) -> 
             raise OptionError(f"{job.method}: an incumbent cannot be combined with {job.restriction} (a "
                               f"schedule outside the restriction would cap its search)")
         return False
-    found, exhausted = to_cap(search.instance, given, search.clock.deadline, job.method)
+    found, exhausted = to_cap(search.instance, given, search.budget, job.method)
     if found is None:
         return exhausted
     search.stats["incumbent"] = {"method": found.method, "makespan": found.makespan}
@@ -194,4 +194,4 @@ def _parts(parts: dict) -> str:
     return ", ".join(f"{k} {v}" for k, v in parts.items() if v is not None)
 
 
-__all__ = ["RESTRICTIONS", "default_cap", "plan_cpsat", "plan_sat", "run"]
+__all__ = ["RESTRICTIONS", "default_cap", "makespan_search", "plan_cpsat", "plan_sat"]

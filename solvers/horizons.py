@@ -11,8 +11,6 @@ has a model of its own.
 """
 from __future__ import annotations
 
-import time
-
 from bille.encodings import SAT, UNKNOWN, UNSAT
 from bille.encodings.model import OutOfTime
 from bille.encodings.solution import decode
@@ -23,7 +21,7 @@ from .search import Search
 
 def sequential(search: Search) -> Result:
     """The search of the module docstring on ``search``'s state; its result."""
-    job, inst, clock = search.job, search.instance, search.clock
+    job, inst = search.job, search.instance
     T = search.proved_below
     if job.first_horizon is not None:
         T = min(max(T, job.first_horizon), search.cap)
@@ -39,16 +37,16 @@ def sequential(search: Search) -> Result:
                 span = None
                 last = min(search.cap, T + job.chunk - 1) if job.incremental else T
                 try:
-                    model = job.model(inst, last, T, clock.deadline)
-                    span = (model, job.open(model, inst, clock.deadline), T, last)
+                    model = job.model(inst, last, T, search.budget)
+                    span = (model, job.open(model, inst, search.budget), T, last)
                 except OutOfTime:
                     return search.timeout()
             model, backend = span[0], span[1]
-            began = time.perf_counter()
+            began = search.budget.now()
             outcome = search.solve(backend, [model.done[T]] if job.incremental else [])
             if outcome.status == UNSAT:
                 search.proved_below = T + 1  # before the news goes out: a listener may stop the search
-            search.record(T, backend, outcome.status, time.perf_counter() - began,
+            search.record(T, backend, outcome.status, search.budget.now() - began,
                           model_horizon=span[3] if job.incremental else None)
             if outcome.status == UNKNOWN:
                 return search.timeout()

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
-import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -16,6 +15,7 @@ import numpy as np
 from bille.heuristics import lacam, lacam_states, reconfigure, temporal_astar
 from bille.instances import Instance, OptionError
 from bille.instances.metrics import makespan as ids_makespan
+from bille.instances.run import Budget, Run, unlimited
 from bille.instances.schedule import Schedule, bind
 
 from .compact import compact
@@ -54,7 +54,7 @@ def from_schedule(instance: Instance, schedule: Schedule, method: str) -> Incumb
     return Incumbent(bind(instance, schedule)[:, :makespan], makespan, method)
 
 
-def first_schedule(instance: Instance, budget: float, improve: bool = True,
+def first_schedule(instance: Instance, budget: Budget, improve: bool = True,
                    cut: list | None = None) -> Incumbent | None:
     """The shortest valid schedule the heuristics find within ``budget`` seconds, or None.
 
@@ -74,7 +74,7 @@ def first_schedule(instance: Instance, budget: float, improve: bool = True,
     return _portfolio(instance, runs, budget, improve, cut=cut)
 
 
-def retry(instance: Instance, cut: list, budget: float) -> Incumbent | None:
+def retry(instance: Instance, cut: list, budget: Budget) -> Incumbent | None:
     """The first valid schedule of the runs that :func:`first_schedule` cut short (``cut``: name,
     what to run, seconds it had), each given twice its last time in turn (rounds over the runs
     still cut, until one finds a schedule or ``budget`` ends), or None. A run is *cut short* when
@@ -84,15 +84,14 @@ def retry(instance: Instance, cut: list, budget: float) -> Incumbent | None:
     (docs/decisions.md). Example: on ``bille gen random --width 40 --height 40 --tiles 600
     --robots 6 --moved 30 --seed 1`` the loop with LaCAM* needs more than its share of the first
     schedule's budget, and nothing else finds a schedule."""
-    end = time.perf_counter() + budget
-    pending = list(cut)
-    while pending and time.perf_counter() < end:
+    pending, total = list(cut), budget.seconds()
+    while pending and not budget.expired():
         name, how, had = pending.pop(0)
-        left = end - time.perf_counter()
+        left = budget.left()
         limit = min(left, 2 * had)
-        found = _run(instance, how, max(0.01, limit), improve=False)
+        found = _run(instance, how, budget.child(max(0.01, limit)), improve=False)
         if found is not None and found.schedule is not None:
-            candidate = _compacted_result(instance, found, name, _compact_s(budget))
+            candidate = _compacted_result(instance, found, name, budget.child(_compact_s(total)))
             if candidate is not None:
                 return candidate
         elif _cut_short(found) and limit < left:
@@ -100,7 +99,7 @@ def retry(instance: Instance, cut: list, budget: float) -> Incumbent | None:
     return None
 
 
-def fewer_robots(instance: Instance, budget: float | None) -> Incumbent | None:
+def fewer_robots(instance: Instance, budget: Budget | None) -> Incumbent | None:
     """The first valid schedule the reconfiguration loop finds within ``budget`` seconds with
     fewer robots taking jobs (the loop's ``active``; the others only keep out of the way), or
     None: for when the loop with every robot finds none. On crowded maps the robots with jobs
@@ -110,7 +109,7 @@ def fewer_robots(instance: Instance, budget: float | None) -> Incumbent | None:
     every set before the next layer, each run within a quarter of the budget. The first schedule
     found is returned, compacted as in :func:`first_schedule`: runs that fail mostly take their
     whole share (a joint plan not found in time), so looking on for a shorter one costs the time
-    in which the windows shorten the first. ``budget`` None: no time limit, each run ends at the
+    in which the windows shorten the first. ``budget`` None (or one without a time limit): each run ends at the
     loop's own bounds (steps, priority shifts, the motion layers' expansions) and compaction at
     its fixed point, so the answer does not depend on the machine's speed."""
     m = instance.num_robots
@@ -120,19 +119,19 @@ def fewer_robots(instance: Instance, budget: float | None) -> Incumbent | None:
              (motion, transfer, "given", list(active)), RUN_SHARE)
             for k in range(m - 1, 0, -1) for motion, transfer in FEWER
             for active in itertools.combinations(range(m), k))
-    return _portfolio(instance, runs, budget, improve=False, first=True)
+    return _portfolio(instance, runs, budget or unlimited(), improve=False, first=True)
 
 
-def compacted(instance: Instance, found: Incumbent, time_limit: float | None) -> Incumbent:
-    """``found`` with its actions as early as they go (:mod:`.compact`), if that is shorter and
-    valid."""
-    ids = compact(instance, found.ids, time_limit)
+def compacted(instance: Instance, found: Incumbent, budget: Budget | None) -> Incumbent:
+    """``found`` with its actions as early as they go (:mod:`.compact`, within ``budget``), if that
+    is shorter and valid."""
+    ids = compact(instance, found.ids, budget)
     if ids.shape[1] >= found.makespan:
         return found
     return from_schedule(instance, Schedule.from_ids(instance, ids), found.method) or found
 
 
-def to_cap(instance: Instance, given: Schedule | None, deadline: float | None,
+def to_cap(instance: Instance, given: Schedule | None, budget: Budget,
            method: str) -> tuple[Incumbent | None, bool]:
     """The exact solvers' first schedule, a cap on their horizons and a fallback: the one
     ``given`` (which must be valid), else the heuristics' in a twentieth of the time left (at
@@ -146,15 +145,16 @@ def to_cap(instance: Instance, given: Schedule | None, deadline: float | None,
             raise OptionError(f"{method}: the incumbent schedule is not valid for instance "
                               f"'{instance.name}' (bille check says why)")
         return found, False
-    budget = 1.0 if deadline is None else min(1.0, 0.05 * (deadline - time.perf_counter()))
-    found = first_schedule(instance, max(budget, 0.01), improve=False)  # a cap: the proof follows
-    found = found or fewer_robots(instance, max(budget, 0.01))
-    if found is not None or deadline is None:
+    limited = budget.seconds() is not None
+    seconds = max(0.01, min(1.0, 0.05 * budget.left()) if limited else 1.0)
+    found = first_schedule(instance, budget.child(seconds), improve=False)  # a cap: the proof follows
+    found = found or fewer_robots(instance, budget.child(seconds))
+    if found is not None or not limited:
         return found, False
-    return complete_search(instance, max(0.01, 0.1 * (deadline - time.perf_counter())))
+    return complete_search(instance, budget.child(max(0.01, 0.1 * budget.left())))
 
 
-def complete_search(instance: Instance, time_limit: float) -> tuple[Incumbent | None, bool]:
+def complete_search(instance: Instance, budget: Budget) -> tuple[Incumbent | None, bool]:
     """A first schedule from the complete planner, for when the heuristics found none: LaCAM*
     over whole states (:mod:`bille.heuristics.lacam_states`), after LaCAM* on the fixed
     structure on path planning (a walking schedule, found faster where one exists). Returns the
@@ -162,49 +162,45 @@ def complete_search(instance: Instance, time_limit: float) -> tuple[Incumbent | 
     exhausted the space of whole states; a walking search that fails proves nothing, since
     robots may move tiles aside).
     """
-    end = time.perf_counter() + time_limit
-    compact_s = max(0.05, min(2.0, 0.1 * time_limit))  # its schedules are mostly waits
+    compact_s = max(0.05, min(2.0, 0.1 * budget.left()))  # its schedules are mostly waits
     if not instance.is_reconfiguration:
-        found = lacam.plan(instance, time_limit=time_limit, improve=0.0)
+        found = lacam.plan(instance, run=Run(budget), improve=0.0)
         if found.schedule is not None:
-            return _compacted_result(instance, found, "lacam", compact_s), False
-    if instance.collisions == "classic" or time.perf_counter() >= end:
+            return _compacted_result(instance, found, "lacam", budget.child(compact_s)), False
+    if instance.collisions == "classic" or budget.expired():
         return None, False
-    found = lacam_states.plan(instance, time_limit=end - time.perf_counter())
+    found = lacam_states.plan(instance, run=Run(budget))
     if found.schedule is not None:
-        return _compacted_result(instance, found, "lacam-states", compact_s), False
+        return _compacted_result(instance, found, "lacam-states", budget.child(compact_s)), False
     return None, found.status == "infeasible"
 
 
-def _compacted_result(instance: Instance, found, method: str, seconds: float) -> Incumbent | None:
-    """A planner's result as a compacted incumbent (:func:`compacted`, for ``seconds``), or None if
-    its schedule is not valid."""
+def _compacted_result(instance: Instance, found, method: str, budget: Budget) -> Incumbent | None:
+    """A planner's result as a compacted incumbent (:func:`compacted`, within ``budget``), or None
+    if its schedule is not valid."""
     candidate = from_schedule(instance, found.schedule, method)
-    return candidate and compacted(instance, candidate, seconds)
+    return candidate and compacted(instance, candidate, budget)
 
 
-def _portfolio(instance: Instance, runs, budget: float, improve: bool, first: bool = False,
+def _portfolio(instance: Instance, runs, budget: Budget, improve: bool, first: bool = False,
                cut: list | None = None) -> Incumbent | None:
     """The shortest valid schedule (the first one, if ``first``) of the ``runs`` (name, what to
-    run for :func:`_run`, share of the budget) within ``budget`` seconds, each compacted; the runs
-    that ran out of their time go to ``cut`` (name, what to run, seconds), if given."""
-    end = None if budget is None else time.perf_counter() + budget
+    run for :func:`_run`, share of the budget) within ``budget``, each compacted; the runs that ran
+    out of their time go to ``cut`` (name, what to run, seconds), if given."""
+    total = budget.seconds()  # None: the runs' own bounds end them (see fewer_robots)
     best = None
     for name, how, share in runs:
-        limit = None  # no budget: the run's own bounds end it (see fewer_robots)
-        if end is not None:
-            left = end - time.perf_counter()
-            if left <= 0:
-                break
-            limit = max(0.01, min(left, share * budget))
-        found = _run(instance, how, limit, improve)
+        if budget.expired():
+            break
+        limit = None if total is None else max(0.01, min(budget.left(), share * total))
+        found = _run(instance, how, budget.child(limit), improve)
         if found is None:
             continue
         if found.schedule is None:
             if cut is not None and _cut_short(found):
                 cut.append((name, how, limit))
             continue
-        candidate = _compacted_result(instance, found, name, _compact_s(budget))
+        candidate = _compacted_result(instance, found, name, budget.child(_compact_s(total)))
         if candidate is not None and (best is None or candidate.makespan < best.makespan):
             best = candidate
             if first:
@@ -223,20 +219,20 @@ def _compact_s(budget: float | None) -> float | None:
     return None if budget is None else max(0.01, min(0.5, 0.1 * budget))
 
 
-def _run(instance: Instance, how, limit: float, improve: bool):
+def _run(instance: Instance, how, budget: Budget, improve: bool):
     if instance.is_reconfiguration:
         if instance.collisions == "classic":
             return None
         motion, transfer, sequence, active = how
         if sequence == "derived":
             instance = dataclasses.replace(instance, tasks=None)
-        return reconfigure.plan(instance, motion=motion, load_transfer=transfer, active=active, time_limit=limit,
+        return reconfigure.plan(instance, motion=motion, load_transfer=transfer, active=active, run=Run(budget),
                                 method=motion)
     if how == "lacam":
-        return lacam.plan(instance, time_limit=limit, improve=min(1.0, limit / 2) if improve else 0.0)
+        return lacam.plan(instance, run=Run(budget), improve=min(1.0, budget.left() / 2) if improve else 0.0)
     if instance.collisions == "classic":
         return None
-    return temporal_astar.plan(instance, time_limit=limit)
+    return temporal_astar.plan(instance, run=Run(budget))
 
 
 def makespan_of(instance: Instance, ids: np.ndarray) -> int:

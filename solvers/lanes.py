@@ -9,7 +9,6 @@ solves above it; the ones below go on, since one of them may still be satisfiabl
 """
 from __future__ import annotations
 
-import time
 from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 
 from bille.encodings import SAT, UNKNOWN, UNSAT
@@ -22,7 +21,7 @@ from .search import Search
 
 def parallel(search: Search) -> Result:
     """The search of the module docstring on ``search``'s state (``job.threads`` lanes); its result."""
-    job, inst, clock = search.job, search.instance, search.clock
+    job, inst = search.job, search.instance
     lanes = job.threads
     next_T = search.proved_below  # the next horizon to start
     answers: dict[int, str] = {}
@@ -39,12 +38,12 @@ def parallel(search: Search) -> Result:
             best = min(found, default=None)
             while len(running) < lanes and next_T <= search.cap and (best is None or next_T < best):
                 try:
-                    model = job.model(inst, next_T, next_T, clock.deadline)
-                    backend = job.open(model, inst, clock.deadline, threads=1)
+                    model = job.model(inst, next_T, next_T, search.budget)
+                    backend = job.open(model, inst, search.budget, threads=1)
                 except OutOfTime:
                     return search.timeout()
                 search.stats["horizons"].append({"T": next_T, **backend.size()})
-                running[pool.submit(_lane, backend, clock.deadline)] = (next_T, model, backend)
+                running[pool.submit(_lane, backend, search.budget)] = (next_T, model, backend)
                 next_T += 1
             if not running:
                 return search.infeasible()
@@ -90,8 +89,8 @@ def parallel(search: Search) -> Result:
     return search.optimal(T, model, backend, outcome)
 
 
-def _lane(backend, deadline: float | None) -> tuple:
+def _lane(backend, budget) -> tuple:
     """Decide one horizon: its outcome and the seconds it took."""
-    began = time.perf_counter()
-    outcome = backend.solve(deadline=deadline)
-    return outcome, time.perf_counter() - began
+    began = budget.now()
+    outcome = backend.solve(budget=budget)
+    return outcome, budget.now() - began

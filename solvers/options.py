@@ -4,9 +4,10 @@
 each option given against them before the method runs: an integer where ``int`` is declared
 (not a boolean), a finite number where ``float`` is (an integer is accepted), ``true``/``false``
 where ``bool`` is, a list of integers where ``list[int]`` is, and ``None`` only where the default
-or the annotation allows it. Common names carry a range: ``time_limit`` is a positive number of
-seconds, counts (``max_*``, ``threads``, ``chunk``, ``horizon``) are at least 1, ``epsilon`` at
-least 1, ``d_tr`` and ``seed`` at least 0. What is particular to one method (a solver name, a
+or the annotation allows it. Common names carry a range: counts (``max_*``, ``threads``,
+``chunk``, ``horizon``) are at least 1, ``epsilon`` at least 1, ``d_tr`` and ``seed`` at least 0
+Every method also takes ``time_limit``, a positive number of seconds or None (``solve()`` turns
+it into the run's budget; the planning functions take the run, never a number of seconds). What is particular to one method (a solver name, a
 connectivity encoding) the method checks itself, with an :class:`OptionError` naming it.
 """
 from __future__ import annotations
@@ -22,11 +23,14 @@ _AT_LEAST = {"threads": 1, "chunk": 1, "horizon": 1, "max_steps": 0, "max_states
              "max_shifts": 0, "max_nodes": 1, "improve": 0, "window": 2, "max_makespan": 1, "first_horizon": 1, "travel_time": 0, "epsilon": 1, "w": 1, "d_tr": 0, "seed": 0}
 
 
+INTERNAL = ("bounds", "progress", "run")  # handed to a method by solve(), never given as options
+
+
 def check_options(method: str, plan: Callable, options: dict[str, Any], internal: tuple[str, ...] = ()) -> dict:
     """The options, checked against ``plan``'s signature (see the module docstring); raises
     :class:`OptionError` with one line naming the method, the option and what was expected."""
-    hints = typing.get_type_hints(plan)
-    accepted = [n for n in hints if n not in ("instance", "return") and n not in internal]
+    hints = {**typing.get_type_hints(plan), "time_limit": float | None}
+    accepted = [n for n in hints if n not in ("instance", "return") and n not in INTERNAL + internal]
     for name, value in options.items():
         if name not in accepted:
             raise OptionError(f"{method}: unknown option '{name}' (expected one of: {', '.join(accepted)})")

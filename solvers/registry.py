@@ -10,16 +10,16 @@ decided here, not by the planners.
 from __future__ import annotations
 
 import importlib
-import time
 from collections.abc import MutableMapping
 from typing import Callable, Iterator
 
 from bille.instances import Instance, OptionError
 from bille.instances.result import Result
+from bille.instances.run import Run
 
 
 def plan_temporal_astar(instance: Instance, *, epsilon: float = 1.0, horizon: int = 5,
-                        time_limit: float | None = None, max_steps: int | None = None,
+                        run: Run | None = None, max_steps: int | None = None,
                         max_shifts: int | None = None, shift_priorities: bool = True,
                         priorities: list[int] | None = None, load_transfer: bool = False,
                         d_tr: int = 5, active: list[int] | None = None) -> Result:
@@ -32,15 +32,15 @@ def plan_temporal_astar(instance: Instance, *, epsilon: float = 1.0, horizon: in
         if not shift_priorities:
             raise OptionError("temporal-astar: shift_priorities=false is for path planning only")
         return reconfigure.plan(instance, motion="temporal-astar", load_transfer=load_transfer, d_tr=d_tr,
-                                epsilon=epsilon, horizon=horizon, time_limit=time_limit, max_steps=max_steps,
+                                epsilon=epsilon, horizon=horizon, run=run, max_steps=max_steps,
                                 max_shifts=max_shifts, priorities=priorities, active=active)
     _loop_only("temporal-astar", active=active)
-    return temporal_astar.plan(instance, epsilon=epsilon, horizon=horizon, time_limit=time_limit,
+    return temporal_astar.plan(instance, epsilon=epsilon, horizon=horizon, run=run,
                                max_steps=max_steps, max_shifts=max_shifts, shift_priorities=shift_priorities,
                                priorities=priorities)
 
 
-def plan_mstar(instance: Instance, *, epsilon: float = 1.0, od: bool = True, time_limit: float | None = None,
+def plan_mstar(instance: Instance, *, epsilon: float = 1.0, od: bool = True, run: Run | None = None,
                max_expansions: int = 5_000_000, load_transfer: bool = False, d_tr: int = 5,
                max_steps: int | None = None, active: list[int] | None = None) -> Result:
     """M* (:func:`bille.heuristics.mstar.plan`); on an instance that moves tiles, the
@@ -50,9 +50,9 @@ def plan_mstar(instance: Instance, *, epsilon: float = 1.0, od: bool = True, tim
 
     if instance.is_reconfiguration:
         return reconfigure.plan(instance, motion="mstar", load_transfer=load_transfer, d_tr=d_tr, epsilon=epsilon,
-                                time_limit=time_limit, max_steps=max_steps, active=active)
+                                run=run, max_steps=max_steps, active=active)
     _loop_only("mstar", active=active)
-    return mstar.plan(instance, epsilon=epsilon, od=od, time_limit=time_limit, max_expansions=max_expansions)
+    return mstar.plan(instance, epsilon=epsilon, od=od, run=run, max_expansions=max_expansions)
 
 
 # of the time limit, at most, for the loop before the complete search takes over: the loop
@@ -62,7 +62,7 @@ def plan_mstar(instance: Instance, *, epsilon: float = 1.0, od: bool = True, tim
 LOOP_SHARE = 0.5
 
 
-def plan_lacam(instance: Instance, *, objective: str = "makespan", time_limit: float | None = None,
+def plan_lacam(instance: Instance, *, objective: str = "makespan", run: Run | None = None,
                improve: float = 1.0, max_nodes: int = 2_000_000, seed: int = 0, load_transfer: bool = False,
                d_tr: int = 5, max_steps: int | None = None, active: list[int] | None = None) -> Result:
     """LaCAM* (:func:`bille.heuristics.lacam.plan`). On an instance that moves tiles, the
@@ -77,7 +77,7 @@ def plan_lacam(instance: Instance, *, objective: str = "makespan", time_limit: f
 
     if not instance.is_reconfiguration:
         _loop_only("lacam", active=active)
-        return lacam.plan(instance, objective=objective, time_limit=time_limit, improve=improve,
+        return lacam.plan(instance, objective=objective, run=run, improve=improve,
                           max_nodes=max_nodes, seed=seed)
     if instance.collisions == "classic":
         raise OptionError(f"lacam: instance '{instance.name}' moves tiles under classic collisions; "
@@ -85,16 +85,13 @@ def plan_lacam(instance: Instance, *, objective: str = "makespan", time_limit: f
     if objective != "makespan":
         raise OptionError(f"lacam: objective '{objective}' is for path planning; a reconfiguration is "
                           "planned for its makespan")
-    start = time.perf_counter()
-    share = None if time_limit is None else LOOP_SHARE * time_limit
+    run = run or Run.limited()
     loop = reconfigure.plan(instance, motion="lacam", load_transfer=load_transfer, d_tr=d_tr,
-                            time_limit=share, max_steps=max_steps, active=active, method="lacam")
-    if loop.status not in ("unsolved", "timeout"):
+                            run=run.part(run.budget.share(LOOP_SHARE)), max_steps=max_steps, active=active,
+                            method="lacam")
+    if loop.status not in ("unsolved", "timeout") or run.budget.expired():
         return loop
-    left = None if time_limit is None else time_limit - (time.perf_counter() - start)
-    if left is not None and left <= 0:
-        return loop
-    whole = lacam_states.plan(instance, time_limit=left, improve=improve, max_nodes=max_nodes, seed=seed)
+    whole = lacam_states.plan(instance, run=run, improve=improve, max_nodes=max_nodes, seed=seed)
     whole.stats["loop"] = {"status": loop.status, "failure": loop.stats.get("failure"),
                            "steps": loop.stats.get("steps", 0)}
     return whole
@@ -131,6 +128,9 @@ ABOUT = {  # method -> (what it plans for, what it proves); `bille methods` and 
     "bfs": ("least makespan by breadth-first search over joint states (tiny instances)", "optimal makespan"),
 }
 
+# the seconds a method gets from solve() without a time limit given (None: no limit)
+DEFAULT_TIME_LIMIT = {"auto": 60.0, "cbs": 60.0, "anytime": 60.0}
+
 CLASSIC = ("auto", "astar", "cbs", "lacam", "bfs")  # the methods that plan under classic collisions (docs/rules.md)
 
 class Registry(MutableMapping):
@@ -156,6 +156,9 @@ class Registry(MutableMapping):
 
     def __iter__(self) -> Iterator[str]:
         return iter(self._where)
+
+    def __contains__(self, name) -> bool:  # the mapping's own test would import the method
+        return name in self._where
 
     def __len__(self) -> int:
         return len(self._where)

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import multiprocessing
 import signal
-import time
 
 import numpy as np
 
@@ -26,6 +25,7 @@ from bille.encodings.backend import open_backend
 from bille.encodings.model import Options, OutOfTime, build
 from bille.encodings.solution import decode
 from bille.instances import Instance
+from bille.instances.run import Budget
 from bille.instances.schedule import Schedule
 
 from .bracket import Bracket
@@ -38,29 +38,29 @@ except ValueError:
 
 
 class Rise:
-    """The search from ``bracket``'s lower bound up with the back end ``solver``, until ``end``:
-    bounds proved and an optimal schedule go to ``bracket``."""
+    """The search from ``bracket``'s lower bound up with the back end ``solver``, within the run's
+    ``budget``: bounds proved and an optimal schedule go to ``bracket``."""
 
-    def __init__(self, instance: Instance, solver: str, bracket: Bracket, end: float) -> None:
-        self.instance, self.solver, self.bracket, self.end = instance, solver, bracket, end
+    def __init__(self, instance: Instance, solver: str, bracket: Bracket, budget: Budget) -> None:
+        self.instance, self.solver, self.bracket, self.budget = instance, solver, bracket, budget
         self.k = max(1, bracket.lower)
         self.model = self.backend = None
         self.finished = False  # an optimal schedule was found
         self.began = None  # when the horizon k began, and the seconds each horizon decided took
         self.seconds: dict[int, float] = {}
 
-    def step(self, until: float) -> None:
-        """Search until ``until`` (or the bracket closes)."""
+    def step(self, part: Budget) -> None:
+        """Search until ``part`` (a child of the run's budget) expires or the bracket closes."""
         inst, bracket = self.instance, self.bracket
-        while time.perf_counter() < until and not bracket.closed:
+        while not part.expired() and not bracket.closed:
             if self.backend is None:
-                self.began = self.began or time.perf_counter()
+                self.began = self.began or part.now()
                 try:
-                    self.model = build(inst, self.k, Options(), deadline=self.end)
+                    self.model = build(inst, self.k, Options(), budget=self.budget)
                 except OutOfTime:
                     return
                 self.backend = open_backend(self.solver, self.model, inst)
-            outcome = self.backend.solve(deadline=until)
+            outcome = self.backend.solve(budget=part)
             if outcome.status == UNKNOWN:
                 return
             if outcome.status == SAT:  # every horizon below k is infeasible: optimal
@@ -72,7 +72,7 @@ class Rise:
                 self.finished = True
                 self.close()
                 return
-            self.seconds[self.k] = time.perf_counter() - self.began
+            self.seconds[self.k] = part.now() - self.began
             self.began = None
             bracket.prove(self.k + 1)
             self.close()
@@ -86,18 +86,19 @@ class Rise:
 
 class Background:
     """:class:`Rise` in a child process: it sends each proved bound (with the seconds its horizon
-    took), or an optimal schedule, through a pipe; :meth:`step` reads them into ``bracket`` until
-    ``until``. ``k`` is the horizon the child is on, ``seconds`` what each horizon it refuted took."""
+    took), or an optimal schedule, through a pipe; :meth:`step` reads them into ``bracket``. ``k``
+    is the horizon the child is on, ``seconds`` what each horizon it refuted took. The child runs
+    until the run's ``budget`` ends or the parent stops it."""
 
-    def __init__(self, instance: Instance, solver: str, bracket: Bracket, end: float) -> None:
-        self.instance, self.solver, self.bracket, self.end = instance, solver, bracket, end
+    def __init__(self, instance: Instance, solver: str, bracket: Bracket, budget: Budget) -> None:
+        self.instance, self.solver, self.bracket, self.budget = instance, solver, bracket, budget
         self.seconds: dict[int, float] = {}
         self._start()
 
     def _start(self) -> None:
         self.k = self.bracket.lower
         self.inbox, outbox = FORK.Pipe(duplex=False)
-        self.child = FORK.Process(target=_rise_child, args=(self.instance, self.solver, self.k, self.end, outbox),
+        self.child = FORK.Process(target=_rise_child, args=(self.instance, self.solver, self.k, self.budget, outbox),
                                   daemon=True)
         # the terminal's Ctrl-C goes to the whole process group: the child ignores it (the parent
         # stops it), and is born with it held back, so that none lands before it is ignored
@@ -118,10 +119,12 @@ class Background:
         self.close()
         self._start()
 
-    def step(self, until: float) -> None:
+    def step(self, part: Budget) -> None:
+        """Read what the child sent, waiting for news until ``part`` expires (a cancelled run's
+        part reads what is there and returns)."""
         inst, bracket = self.instance, self.bracket
         while not bracket.closed:
-            if not self.inbox.poll(max(0.0, until - time.perf_counter())):
+            if not self.inbox.poll(min(part.left(), 3600.0)):
                 return
             try:
                 kind, value = self.inbox.recv()
@@ -154,8 +157,8 @@ class Ahead:
 
     GROWTH = 2.0  # each horizon's proof is taken to cost at least this many times the one below
 
-    def __init__(self, instance: Instance, solver: str, bracket: Bracket, child: Background, end: float) -> None:
-        self.instance, self.solver, self.bracket, self.child, self.end = instance, solver, bracket, child, end
+    def __init__(self, instance: Instance, solver: str, bracket: Bracket, child: Background, budget: Budget) -> None:
+        self.instance, self.solver, self.bracket, self.child, self.budget = instance, solver, bracket, child, budget
         self.tried: list = []
 
     def pick(self) -> tuple[int, float] | None:
@@ -168,7 +171,7 @@ class Ahead:
             return None
         k, last = done[-1], max(seconds[done[-1]], 1e-3)
         growth = max(self.GROWTH, last / max(seconds[done[-2]], 1e-3))
-        left, tried = self.end - time.perf_counter(), {h for h, _, _ in self.tried}
+        left, tried = self.budget.left(), {h for h, _, _ in self.tried}
         pick = None
         for h in range(max(self.child.k, bracket.lower) + 1, bracket.best.makespan):
             expected = last * growth ** (h - k)
@@ -181,18 +184,17 @@ class Ahead:
     def run(self, h: int, expected: float) -> None:
         """Decide horizon ``h``, for at most twice the seconds expected (at least 5)."""
         inst, bracket = self.instance, self.bracket
-        began = time.perf_counter()
-        deadline = min(self.end, began + max(2 * expected, 5.0))
+        part = self.budget.child(max(2 * expected, 5.0))
         answer = UNKNOWN
         try:
-            model = build(inst, h, Options(), deadline=deadline)
+            model = build(inst, h, Options(), budget=part)
             with open_backend(self.solver, model, inst) as backend:
-                outcome = backend.solve(deadline=deadline)
+                outcome = backend.solve(budget=part)
             answer = outcome.status
         except OutOfTime:
             pass
         finally:
-            self.tried.append([h, answer, round(time.perf_counter() - began, 3)])
+            self.tried.append([h, answer, round(part.elapsed(), 3)])
         if answer == UNSAT:  # no schedule of h steps or fewer
             bracket.prove(h + 1)
             if self.child.k <= h:
@@ -204,16 +206,18 @@ class Ahead:
             bracket.offer(found)
 
 
-def _rise_child(instance: Instance, solver: str, lower: int, end: float, outbox) -> None:
-    """The child's loop: raise the bound until ``end`` or an optimal schedule, sending each news."""
+def _rise_child(instance: Instance, solver: str, lower: int, budget: Budget, outbox) -> None:
+    """The child's loop: raise the bound until ``budget`` ends (its copy of the parent's: the
+    parent's cancel does not reach it, the parent stops it) or an optimal schedule, sending each
+    news."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
     bracket = Bracket(lower)
-    rise = Rise(instance, solver, bracket, end)
+    rise = Rise(instance, solver, bracket, budget)
     bracket.on_bound.append(lambda value: outbox.send(("lower", (value, rise.seconds.get(value - 1)))))
     bracket.on_schedule.append(lambda found: outbox.send(("optimal", found.ids.tolist())))
-    while time.perf_counter() < end:
-        rise.step(end)
+    while not budget.expired():
+        rise.step(budget)
         if rise.finished:
             break
     rise.close()

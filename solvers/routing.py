@@ -34,8 +34,6 @@ The program has two arcs per pair of cells, so it is built only for instances of
 """
 from __future__ import annotations
 
-import time
-
 import numpy as np
 from scipy.optimize import linprog
 from scipy.sparse import coo_matrix
@@ -43,13 +41,14 @@ from scipy.sparse import coo_matrix
 from bille.instances import Instance
 from bille.instances.distances import INF, relaxed_for
 from bille.instances.moveset import Kind
+from bille.instances.run import Budget
 
 MAX_CELLS = 200
 
 
-def routing_bound(instance: Instance, by_target, deadline: float | None = None) -> int | None:
+def routing_bound(instance: Instance, by_target, budget: Budget | None = None) -> int | None:
     """``ceil(LP / m)`` of the module docstring, or None when the program is not built (too
-    many cells) or not solved by the ``deadline`` (a ``time.perf_counter()`` value).
+    many cells) or not solved within ``budget``.
     ``by_target(graph, kind, n)`` lists ``(pose, cell)`` pairs."""
     world, state = instance.world, instance.start_state
     n = world.width * world.height
@@ -101,7 +100,7 @@ def routing_bound(instance: Instance, by_target, deadline: float | None = None) 
         robot_rows.append((row, int(to_goal[p]), bool(state.carrying[r])))
         place = faces[Kind.PLACE][id(g)]
         ends = np.minimum(ends, [to_goal[place[c]].min() if c in place else INF for c in cells])
-    return _solve(k, m, balance, carry, walk, ends, robot_rows, deadline)
+    return _solve(k, m, balance, carry, walk, ends, robot_rows, budget)
 
 
 def _mask(n: int, cells: list[int]) -> np.ndarray:
@@ -110,7 +109,7 @@ def _mask(n: int, cells: list[int]) -> np.ndarray:
     return out
 
 
-def _solve(k, m, balance, carry, walk, ends, robot_rows, deadline: float | None) -> int | None:
+def _solve(k, m, balance, carry, walk, ends, robot_rows, budget: Budget | None) -> int | None:
     """Build and solve the program: variables are arc flows; rows are the robot supplies (0 ..
     m-1), the conservation at the pick nodes (``K``) and the place nodes (``P``: inflow minus
     outflow is 0), and the tile balance per cell (``B``: arcs into its place node minus arcs
@@ -150,10 +149,11 @@ def _solve(k, m, balance, carry, walk, ends, robot_rows, deadline: float | None)
                    shape=(m + 3 * k, base)).tocsr()
     b = np.concatenate([np.ones(m), np.zeros(2 * k), balance])
     options = {}
-    if deadline is not None:
-        options["time_limit"] = deadline - time.perf_counter()
-        if options["time_limit"] <= 0:
-            return None
+    seconds = None if budget is None else budget.seconds()
+    if budget is not None and budget.expired():
+        return None
+    if seconds is not None:
+        options["time_limit"] = seconds
     got = linprog(np.concatenate(costs), A_eq=a, b_eq=b, bounds=(0, None), method="highs", options=options)
     if got.status != 0:  # not solved (in time): no bound from the program
         return None

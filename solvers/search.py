@@ -1,11 +1,10 @@
 """The state of one exact makespan search (a part of :mod:`.exact`): its settings (:class:`Job`),
-its clock, what it has proved and found (:class:`Search`), and the steps every search ends
+its budget, what it has proved and found (:class:`Search`), and the steps every search ends
 with: the result, a timeout, the proof of an incumbent, the minimization of tiles traveled.
 The searches themselves are :func:`.horizons.sequential` and :func:`.lanes.parallel`.
 """
 from __future__ import annotations
 
-import time
 from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Callable
@@ -18,6 +17,7 @@ from bille.encodings.model import Model, Options, OutOfTime, build
 from bille.encodings.solution import decode
 from bille.instances import Instance
 from bille.instances.result import Result
+from bille.instances.run import Budget
 from bille.instances.schedule import Schedule
 
 # the restrictions of the model (encodings.model.Options): what their optimum is optimal for, and
@@ -52,47 +52,23 @@ class Job:
     travel_time: float | None = None
     restriction: str | None = None  # a key of RESTRICTIONS
 
-    def model(self, instance: Instance, T: int, first: int, deadline: float | None) -> Model:
+    def model(self, instance: Instance, T: int, first: int, budget: Budget) -> Model:
         """The model for horizons ``first`` to ``T`` (``T`` alone when not incremental)."""
-        return build(instance, T, self.options, min_done=first if self.incremental else None, deadline=deadline)
+        return build(instance, T, self.options, min_done=first if self.incremental else None, budget=budget)
 
-    def open(self, model: Model, instance: Instance, deadline: float | None, threads: int | None = None) -> Backend:
+    def open(self, model: Model, instance: Instance, budget: Budget, threads: int | None = None) -> Backend:
         return open_backend(self.solver, model, instance, connectivity=self.options.connectivity,
-                            threads=threads or self.threads, seed=self.seed, presolve=self.presolve, deadline=deadline)
-
-
-class Clock:
-    """The search's start and deadline (None: no limit); :meth:`travel` narrows the deadline."""
-
-    def __init__(self, time_limit: float | None) -> None:
-        self.start = time.perf_counter()
-        self.deadline = None if time_limit is None else self.start + time_limit
-
-    def elapsed(self) -> float:
-        return time.perf_counter() - self.start
-
-    @contextmanager
-    def travel(self, budget: float | None):
-        """The minimization of tiles traveled runs until its own, earlier deadline: ``budget``
-        seconds, by default half the time spent so far (at least 1 s)."""
-        full = self.deadline
-        if budget is None:
-            budget = max(1.0, 0.5 * self.elapsed())
-        end = time.perf_counter() + budget
-        self.deadline = end if full is None else min(full, end)
-        try:
-            yield
-        finally:
-            self.deadline = full
+                            threads=threads or self.threads, seed=self.seed, presolve=self.presolve, budget=budget)
 
 
 class Search:
     """What one makespan search knows: every horizon below ``proved_below`` is infeasible;
     ``incumbent`` (action ids) is the best schedule within the horizon cap ``cap``, ``fallback``
-    one above it; ``stats`` the result's statistics."""
+    one above it; ``stats`` the result's statistics; ``budget`` the search's (narrowed while tiles
+    traveled are minimized, :meth:`travel_budget`)."""
 
-    def __init__(self, job: Job, instance: Instance, clock: Clock, bounds, cap: int, progress: Callable | None):
-        self.job, self.instance, self.clock, self.bounds = job, instance, clock, bounds
+    def __init__(self, job: Job, instance: Instance, budget: Budget, bounds, cap: int, progress: Callable | None):
+        self.job, self.instance, self.budget, self.bounds = job, instance, budget, bounds
         self.cap, self.progress = cap, progress
         self.proved_below = max(1, bounds.lower)
         self.incumbent: np.ndarray | None = None
@@ -105,8 +81,8 @@ class Search:
             self.stats["objective"] = RESTRICTIONS[job.restriction][0]
 
     def solve(self, backend: Backend, assumptions=(), **objective) -> Outcome:
-        """``backend.solve`` until the deadline, its cuts counted in ``stats``."""
-        outcome = backend.solve(assumptions, self.clock.deadline, **objective)
+        """``backend.solve`` within the budget, its cuts counted in ``stats``."""
+        outcome = backend.solve(assumptions, self.budget, **objective)
         self.stats["cuts"] += outcome.cuts
         return outcome
 
@@ -120,7 +96,7 @@ class Search:
     def report(self, row: dict) -> None:
         if self.progress is not None:
             self.progress({"horizon": row["T"], "answer": row["answer"], "time_s": row["time_s"],
-                           "elapsed": self.clock.elapsed()})
+                           "elapsed": self.budget.elapsed()})
 
     def result(self, status: str, ids=None, lower: int | None = None) -> Result:
         """The result; a restricted search's proofs (:data:`RESTRICTIONS`) hold for the schedules of
@@ -131,7 +107,7 @@ class Search:
             lower = self.bounds.lower
         method = self.job.method
         schedule = None if ids is None else Schedule.from_ids(self.instance, ids, meta={"method": method})
-        return Result(method, status, schedule, lower_bound=lower, stats=self.stats, time_s=self.clock.elapsed())
+        return Result(method, status, schedule, lower_bound=lower, stats=self.stats, time_s=self.budget.elapsed())
 
     def timeout(self) -> Result:
         """Time is up: the incumbent if there is one (also one above the horizon cap), with the
@@ -160,7 +136,7 @@ class Search:
     def optimal(self, T: int, model: Model, backend: Backend, outcome: Outcome) -> Result:
         """Horizon ``T`` is satisfiable and every one below it infeasible: the outcome's schedule
         is optimal; tiles traveled are then minimized."""
-        self.stats["makespan_s"] = round(self.clock.elapsed(), 3)
+        self.stats["makespan_s"] = round(self.budget.elapsed(), 3)
         ids = self.travel(backend, model, T, decode(model, self.instance, outcome.value)[:, :T], outcome.values)
         self.stats["solver"] = backend.stats
         return self.result("optimal", ids, lower=T)
@@ -170,12 +146,12 @@ class Search:
         Tiles traveled are then minimized at its makespan as after any other proof."""
         k, ids = self.proved_below, self.incumbent
         self.stats["tiles_traveled_optimal"] = False
-        self.stats["makespan_s"] = round(self.clock.elapsed(), 3)
+        self.stats["makespan_s"] = round(self.budget.elapsed(), 3)
         if self.job.minimize_travel:
-            with self.clock.travel(self.job.travel_time):
+            with self.travel_budget():
                 try:
-                    model = self.job.model(self.instance, k, k, self.clock.deadline)
-                    backend = self.job.open(model, self.instance, self.clock.deadline)
+                    model = self.job.model(self.instance, k, k, self.budget)
+                    backend = self.job.open(model, self.instance, self.budget)
                 except OutOfTime:
                     return self.result("optimal", ids, lower=k)
                 try:
@@ -195,10 +171,22 @@ class Search:
         steps = {v: t for (_, t), group in model.y.items() for v, _, _ in group}
         motion = [v for v in model.motion if steps[v] <= k]  # done[k] excludes the later ones
         backend.tune(presolve=True)  # CP-SAT: an objective profits from presolve
-        with self.clock.travel(self.job.travel_time):
+        with self.travel_budget():
             outcome = self.solve(backend, [model.done[k]] if k in model.done else [], objective=Objective(motion),
                                  hint=hint)
         if outcome.values is None:
             return ids  # no better schedule in time: keep this one
         self.stats["tiles_traveled_optimal"] = outcome.status == SAT
         return decode(model, self.instance, outcome.value)[:, :k]
+
+    @contextmanager
+    def travel_budget(self):
+        """The minimization of tiles traveled runs on a child budget: ``job.travel_time`` seconds,
+        by default half the time spent so far (at least 1 s)."""
+        full = self.budget
+        seconds = self.job.travel_time
+        self.budget = full.child(max(1.0, 0.5 * full.elapsed()) if seconds is None else seconds)
+        try:
+            yield
+        finally:
+            self.budget = full

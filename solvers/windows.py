@@ -11,7 +11,6 @@ nothing about the instance, but its models are a fraction of the size (lt-1, a w
 from __future__ import annotations
 
 import dataclasses
-import time
 
 import numpy as np
 
@@ -23,6 +22,7 @@ from bille.encodings.solution import decode
 from bille.instances import Instance, instance_at
 from bille.instances.grid import Grid
 from bille.instances.rules import run
+from bille.instances.run import Budget
 from bille.instances.schedule import Schedule
 
 from .bracket import Bracket
@@ -31,18 +31,18 @@ from .incumbent import Incumbent, from_schedule
 
 class Windows:
     """Large neighbourhood search over time windows of the bracket's best schedule (module
-    docstring): windows of ``length`` steps to start with, each given ``budget`` seconds to
-    start with, re-solved by ``solver`` (a back end's name); ``swap`` lets interchangeable robots
+    docstring): windows of ``length`` steps to start with, each given ``seconds`` to start with
+    (within the run's ``budget``), re-solved by ``solver`` (a back end's name); ``swap`` lets interchangeable robots
     end in each other's places. Shorter schedules are offered to ``bracket``, and the whole
     schedule's window proves bounds there. ``counts``: windows tried, shortened (swapped),
     proved not to shorten, undecided; ``proved_bound`` once the whole schedule's window proved one."""
 
-    def __init__(self, instance: Instance, bracket: Bracket, solver: str, length: int, budget: float, swap: bool,
-                 end: float, kept: bool = False) -> None:
-        self.instance, self.bracket, self.solver, self.swap, self.end = instance, bracket, solver, swap, end
+    def __init__(self, instance: Instance, bracket: Bracket, solver: str, length: int, seconds: float, swap: bool,
+                 budget: Budget, kept: bool = False) -> None:
+        self.instance, self.bracket, self.solver, self.swap, self.budget = instance, bracket, solver, swap, budget
         self.kept = kept
         self.length = length
-        self.budget = budget  # seconds per window: grows by half after an undecided one
+        self.seconds = seconds  # per window: grows by half after an undecided one
         self.done: set = set()  # (schedule key, a, b) proved not to shorten
         self.cursor = 0
         self.counts = {"tried": 0, "shortened": 0, "swapped": 0, "not_shorter": 0, "undecided": 0}
@@ -54,9 +54,10 @@ class Windows:
         out += [(a, a + w) for a in range(0, makespan - w, stride)]
         return out
 
-    def step(self, until: float) -> None:
+    def step(self, part: Budget) -> None:
+        """Windows until ``part`` (a child of the run's budget) expires or the bracket closes."""
         bracket = self.bracket
-        while time.perf_counter() < until and not bracket.closed:
+        while not part.expired() and not bracket.closed:
             best = bracket.best
             key = best.ids.tobytes()
             todo = [(a, b) for a, b in self.windows(best.makespan) if (key, a, b) not in self.done]
@@ -65,11 +66,11 @@ class Windows:
                 continue
             a, b = todo[self.cursor % len(todo)]
             self.cursor += 1
-            status = self.shorten(best, a, b, min(self.end, time.perf_counter() + self.budget))
+            status = self.shorten(best, a, b, self.budget.child(self.seconds))
             if status == UNSAT:
                 self.done.add((key, a, b))
             elif status == UNKNOWN:
-                self.budget *= 1.5
+                self.seconds *= 1.5
 
     def _proved(self, bound: int) -> str:
         """The window over the whole schedule is the exact search from the start to the goal: no
@@ -81,7 +82,7 @@ class Windows:
         self.bracket.prove(bound)
         return UNSAT
 
-    def shorten(self, best: Incumbent, a: int, b: int, until: float) -> str:
+    def shorten(self, best: Incumbent, a: int, b: int, budget: Budget) -> str:
         inst, counts = self.instance, self.counts
         counts["tried"] += 1
         states = [inst.start_state] + list(run_states(inst, best.ids))
@@ -96,12 +97,12 @@ class Windows:
         if L < 1:
             return self._proved(best.makespan) if whole else UNSAT
         try:
-            model = build(sub, L, Options(keep_structure=self.kept), min_done=1, deadline=until, end=end,
+            model = build(sub, L, Options(keep_structure=self.kept), min_done=1, budget=budget, end=end,
                           swap=self.swap)
         except OutOfTime:
             counts["undecided"] += 1
             return UNKNOWN
-        found = shortest_part(model, sub, L, until, self.solver)
+        found = shortest_part(model, sub, L, budget, self.solver)
         if isinstance(found, str):
             counts["undecided" if found == UNKNOWN else "not_shorter"] += 1
             return self._proved(best.makespan) if found == UNSAT and whole else found
@@ -117,14 +118,14 @@ class Windows:
         return SAT
 
 
-def shortest_part(model, sub: Instance, L: int, until: float, solver: str):
+def shortest_part(model, sub: Instance, L: int, budget: Budget, solver: str):
     """The window's shortest part: ``done[L]`` required, as many steps ``done`` as can be
     (``done[k]``: every robot waits from step ``k`` on). Returns ``(k, part, roles, shortest)``
     for the best part found (its first ``k`` steps; ``shortest``: proved so), else ``unsat`` or
     ``unknown``."""
     done = [model.done[k] for k in range(1, L + 1)]
     with open_backend(solver, model, sub) as backend:
-        outcome = backend.solve(deadline=until, objective=Objective(done, maximize=True, chain=True, at_most=L - 1))
+        outcome = backend.solve(budget=budget, objective=Objective(done, maximize=True, chain=True, at_most=L - 1))
     if outcome.values is None:
         return outcome.status
     k = next(k for k in range(1, L + 1) if outcome.value(model.done[k]))

@@ -100,14 +100,14 @@ def test_pibt_pulls_a_robot_along_to_pass_in_a_corridor():
     assert result.stats["nodes"] == result.metrics.makespan + 1
 
 
-def test_joint_astar_looks_at_the_clock_inside_one_expansion(monkeypatch):
+def test_joint_astar_looks_at_the_clock_inside_one_expansion():
     # ten point robots on an open floor: the first expansion alone has 5**10 children; a clock
     # that moves one second per look must end the run within it, not after it
     from bille.heuristics import astar
+    from bille.instances.run import Budget, Run
     robots = [{"at": [x, 0]} for x in range(10)]
     inst = classic("\n".join(["T" * 10] * 3), robots, robot_goals=[[x, 2] for x in range(10)])
     clock = iter(range(10**6))
-    monkeypatch.setattr(astar.time, "perf_counter", lambda: next(clock))
-    result = astar.plan(inst, time_limit=2.5)
+    result = astar.plan(inst, run=Run(Budget(2.5, clock=lambda: next(clock))))
     assert result.status == "timeout" and result.stats["failure"] == "time limit"
     assert result.stats["expanded"] == 1 and 0 < result.stats["generated"] < 5**10

@@ -3,6 +3,7 @@ import pytest
 
 from bille.instances import OptionError, load_instance
 from bille.instances.bundled import bundled_path
+from bille.instances.run import Budget
 from bille.instances.schedule import Schedule, bind
 from bille.solvers import solve, validate
 from bille.solvers.bounds import lower_bound
@@ -198,7 +199,7 @@ def test_no_schedule_within_the_horizon_cap_is_no_proof(method, monkeypatch):
 @pytest.mark.parametrize("method", ["cpsat", "sat"])
 def test_a_timeout_returns_the_bound_not_a_crash(method):
     inst = load_instance(bundled_path("bridge-2"))
-    full, quick = lower_bound(inst), lower_bound(inst, time_limit=0)  # 14 with the routing LP, 10 without
+    full, quick = lower_bound(inst), lower_bound(inst, budget=Budget(0))  # 14 with the routing LP, 10 without
     for threads in ({}, {"threads": 2}) if method == "cpsat" else ({},):
         result = solve(inst, method, time_limit=1.0, **threads)
         assert result.status in ("timeout", "feasible", "optimal")
@@ -359,16 +360,14 @@ def test_the_default_cap_gives_way_to_a_longer_incumbent(method, optimum, monkey
 
 @pytest.mark.parametrize("solver", ["glucose42", "minisat22", "cadical195"])
 def test_a_sat_solve_past_its_deadline_answers_unknown_without_solving(solver):
-    import time
-
     from bille.encodings.backend import open_backend
     from bille.encodings.model import Options, build
 
     inst = load_instance(bundled_path("corridor-2"))
     with open_backend(solver, build(inst, 13, Options()), inst) as backend:
-        assert backend.solve([], time.perf_counter() - 1).status == "unknown"
+        assert backend.solve([], Budget(0)).status == "unknown"
         assert backend.stats["conflicts"] == 0
-        assert backend.solve([], time.perf_counter() + 600).status == "sat"  # a timer that never fires
+        assert backend.solve([], Budget(600)).status == "sat"  # a timer that never fires
         assert backend.solve([], None).status == "sat"  # and left no interrupt behind
 
 
@@ -380,25 +379,27 @@ def test_no_solver_thread_under_a_tight_address_space_limit():
     import sys
 
     code = """
-import resource, threading, time
+import resource, threading
 from bille.encodings.backend import open_backend
 from bille.encodings.cnf import THREAD_ROOM
 from bille.encodings.model import Options, build
 from bille.instances import load_instance
 from bille.instances.bundled import bundled_path
+from bille.instances.run import Budget
 from bille.instances.limits import address_room, mapped
+from bille.instances.run import Budget
 assert address_room() == float("inf")
 inst = load_instance(bundled_path("corridor-2"))
 backend = open_backend("glucose42", build(inst, 12, Options()), inst)
 started, start = [], threading.Thread.start
 threading.Thread.start = lambda self: started.append(self) or start(self)
-assert backend.solve([], time.perf_counter() + 60).status == "unsat"  # corridor-2's optimum is 13
+assert backend.solve([], Budget(60)).status == "unsat"  # corridor-2's optimum is 13
 assert started  # with room, the solve runs in a thread of its own
 started.clear()
 size = mapped() + THREAD_ROOM // 4
 resource.setrlimit(resource.RLIMIT_AS, (size, size))
 assert 0 < address_room() < THREAD_ROOM
-assert backend.solve([], time.perf_counter() + 60).status == "unsat"
+assert backend.solve([], Budget(60)).status == "unsat"
 assert not started
 print("ok")
 """

@@ -19,20 +19,21 @@ from bille.solvers import validate
 
 # a solve that would run for minutes: bridge-2 at horizon 22, below its optimum 24
 LONG_SOLVE = """
-import sys, time
+import sys
 from bille.encodings.backend import open_backend
 from bille.encodings.model import Options, build
 from bille.instances import load_instance
 from bille.instances.bundled import bundled_path
+from bille.instances.run import Budget
 inst = load_instance(bundled_path("bridge-2"))
 backend = open_backend(sys.argv[1], build(inst, 22, Options()), inst)
 try:
     print("solving", flush=True)
-    backend.solve(deadline=time.perf_counter() + 600)
+    backend.solve(budget=Budget(600))
     print("answered")
 except KeyboardInterrupt:
     print("interrupted")
-    print(backend.solve(deadline=time.perf_counter() + 0.5).status)  # the back end still answers
+    print(backend.solve(budget=Budget(0.5)).status)  # the back end still answers
 """
 
 

@@ -16,6 +16,7 @@ from bille.instances.bundled import bundled_path
 from bille.instances.generators.random import random_reconfiguration
 from bille.instances.grid import is_connected
 from bille.instances.moveset import Kind
+from bille.instances.run import Run
 from bille.instances.rules import State, apply
 from bille.instances.schedule import Schedule
 from bille.solvers import solve, validate
@@ -334,9 +335,9 @@ def test_a_motion_layer_given_as_an_object_runs_the_loop():
     calls = []
 
     class Counting(TemporalAStar):
-        def step(self, s, fixed, goals, intents, deadline):
+        def step(self, s, fixed, goals, intents, budget):
             calls.append(len(s.steps))
-            return super().step(s, fixed, goals, intents, deadline)
+            return super().step(s, fixed, goals, intents, budget)
 
     by_name = plan(inst, motion="temporal-astar", horizon=10)
     given = plan(inst, motion=Counting(horizon=10))
@@ -401,7 +402,7 @@ def test_only_the_active_robots_take_jobs(motion, name):
     inst = bundled(name)  # on corridor-2 robot 1 carries a tile at the start: it delivers it anyway
     carriers = {i for i, r in enumerate(inst.robots) if r.carrying}
     for active in ([0], [1]):
-        result = plan(inst, motion=motion, active=active, time_limit=30)
+        result = plan(inst, motion=motion, active=active, run=Run.limited(30))
         assert result.status == "feasible", result.stats
         assert validate(inst, result.schedule).valid
         picking = _manipulators(inst, result.schedule)

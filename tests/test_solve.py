@@ -21,12 +21,13 @@ from bille.instances import load_instance
 from bille.instances.bundled import bundled_path
 from bille.instances.moveset import Moveset
 from bille.instances.result import Result
+from bille.instances.run import Budget
 from bille.solvers import METHODS, Schedule, bind, load_schedule, solve, validate
 from bille.solvers.bounds import Bounds, lower_bound
 
 
 class FakeClock:
-    """``solve()``'s clock, moved on by hand."""
+    """A clock moved on by hand, for the budget given to ``solve()``."""
 
     def __init__(self) -> None:
         self.now = 100.0
@@ -36,20 +37,18 @@ class FakeClock:
 
 
 @pytest.fixture
-def clock(monkeypatch):
-    fake = FakeClock()
-    monkeypatch.setattr(solvers, "_clock", fake)
-    return fake
+def clock():
+    return FakeClock()
 
 
 @pytest.fixture
 def slow_bound(monkeypatch, clock):
     """The static bound replaced by one that takes ``seconds[0]`` on the fake clock; ``asked``
-    records the time limit each call was given."""
+    records the seconds left in the budget each call was given."""
     asked, seconds = [], [7.0]
 
-    def lower_bound(instance, *, time_limit=None):
-        asked.append(time_limit)
+    def lower_bound(instance, *, budget=None):
+        asked.append(budget.seconds())
         clock.now += seconds[0]
         return Bounds(3, {"slow part": 3}, [])
 
@@ -60,8 +59,8 @@ def slow_bound(monkeypatch, clock):
 def spy_method(clock, seen, spends=0.0):
     """A method that takes the bound (as exact and anytime do), records what it was given and
     spends ``spends`` seconds on the fake clock."""
-    def plan(instance, *, time_limit: float = 60.0, bounds=None, progress=None) -> Result:
-        seen.append((time_limit, None if bounds is None else bounds.lower))
+    def plan(instance, *, run=None, bounds=None, progress=None) -> Result:
+        seen.append((run.budget.seconds(), None if bounds is None else bounds.lower))
         clock.now += spends
         return Result("spy", "timeout", lower_bound=None)
     return plan
@@ -69,8 +68,8 @@ def spy_method(clock, seen, spends=0.0):
 
 def spy_heuristic(clock, seen, spends=0.0):
     """A method that does not take the bound (as the heuristics)."""
-    def plan(instance, *, time_limit: float | None = None) -> Result:
-        seen.append(time_limit)
+    def plan(instance, *, run=None) -> Result:
+        seen.append(run.budget.seconds())
         clock.now += spends
         return Result("spy", "unsolved", stats={"failure": "deadlock"})
     return plan
@@ -83,7 +82,7 @@ def test_a_method_that_uses_the_bound_gets_the_time_it_left(monkeypatch, clock, 
     asked, _ = slow_bound
     seen = []
     monkeypatch.setitem(METHODS, "anytime", spy_method(clock, seen, spends=2.0))
-    result = solve(POINT4, "anytime", time_limit=10)
+    result = solve(POINT4, "anytime", time_limit=10, budget=Budget(clock=clock))
     assert asked == [10.0] and seen == [(3.0, 3)]  # 7 s of bound, 3 s left for the method
     assert result.time_s == 9.0 and result.lower_bound == 3 and result.stats["bound_s"] == 7.0
 
@@ -93,7 +92,7 @@ def test_a_bound_that_takes_the_whole_limit_leaves_the_method_out(monkeypatch, c
     seconds[0] = 12.0
     seen = []
     monkeypatch.setitem(METHODS, "anytime", spy_method(clock, seen))
-    result = solve(POINT4, "anytime", time_limit=10)
+    result = solve(POINT4, "anytime", time_limit=10, budget=Budget(clock=clock))
     assert seen == [] and result.status == "timeout" and result.lower_bound == 3
     assert "lower bound" in result.stats["failure"]
 
@@ -101,7 +100,7 @@ def test_a_bound_that_takes_the_whole_limit_leaves_the_method_out(monkeypatch, c
 def test_the_default_time_limit_of_a_method_counts_too(monkeypatch, clock, slow_bound):
     seen = []
     monkeypatch.setitem(METHODS, "anytime", spy_method(clock, seen))
-    solve(POINT4, "anytime")
+    solve(POINT4, "anytime", budget=Budget(clock=clock))
     assert seen == [(53.0, 3)]  # the method's default 60 s, less the 7 s of the bound
 
 
@@ -109,9 +108,9 @@ def test_a_heuristic_computes_no_bound_unless_asked(monkeypatch, clock, slow_bou
     asked, _ = slow_bound
     seen = []
     monkeypatch.setitem(METHODS, "temporal-astar", spy_heuristic(clock, seen, spends=4.0))
-    plain = solve(POINT4, "temporal-astar", time_limit=10)
+    plain = solve(POINT4, "temporal-astar", time_limit=10, budget=Budget(clock=clock))
     assert asked == [] and seen == [10] and plain.lower_bound is None and "bound_parts" not in plain.stats
-    asked_for = solve(POINT4, "temporal-astar", time_limit=10, bound=True)
+    asked_for = solve(POINT4, "temporal-astar", time_limit=10, bound=True, budget=Budget(clock=clock))
     assert seen == [10, 10]  # the same time for the method: the bound comes after it
     assert asked == [6.0] and asked_for.lower_bound == 3 and asked_for.stats["bound_parts"] == {"slow part": 3}
 
@@ -120,7 +119,7 @@ def test_past_its_time_the_bound_leaves_out_its_linear_program():
     from bille.solvers.bounds import lower_bound
 
     inst = load_instance(bundled_path("lt-1"))
-    full, cut = lower_bound(inst), lower_bound(inst, time_limit=0)
+    full, cut = lower_bound(inst), lower_bound(inst, budget=Budget(0))
     assert full.parts["routing (LP)"] is not None and cut.parts["routing (LP)"] is None
     assert cut.lower == max(v for k, v in full.parts.items() if k != "routing (LP)") <= full.lower
 
@@ -193,7 +192,7 @@ def test_an_interrupted_method_keeps_what_it_found(monkeypatch, cli, capsys, tmp
     inst = load_instance(bundled_path("corridor-2"))
     found = solve(inst, "temporal-astar")
 
-    def stopped(instance, *, time_limit: float = 60.0, bounds=None, progress=None) -> Result:
+    def stopped(instance, *, run=None, bounds=None, progress=None) -> Result:
         return Result("anytime", "interrupted", found.schedule, lower_bound=bounds.lower + 1)
 
     monkeypatch.setitem(METHODS, "anytime", stopped)
@@ -267,7 +266,7 @@ def test_an_interrupt_let_through_keeps_what_the_method_told(monkeypatch):
     class Found:  # as anytime tells a schedule: its action ids
         ids = bind(inst, found.schedule)
 
-    def stopped(instance, *, time_limit: float = 60.0, bounds=None, on_schedule: Callable | None = None,
+    def stopped(instance, *, run=None, bounds=None, on_schedule: Callable | None = None,
                 on_bound: Callable | None = None) -> Result:
         on_bound(bounds.lower + 2)
         on_schedule(Found())

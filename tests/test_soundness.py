@@ -121,7 +121,7 @@ def test_solve_refuses_a_bound_above_the_makespan(monkeypatch):
     inst = make("TTTT", [{"at": [0, 0]}], moveset="point", robot_goals=[[3, 0]])
     good = bfs(inst)
 
-    def lying(instance, *, time_limit: float | None = None):
+    def lying(instance, *, run=None):
         return Result("bfs", "optimal", good.schedule, lower_bound=good.lower_bound + 1)
 
     monkeypatch.setitem(solvers.METHODS, "bfs", lying)
@@ -138,7 +138,7 @@ def test_solve_refuses_an_optimum_without_its_proof(monkeypatch):
     schedule = schedule_from_text("robots:\n  - [east, east, east, west]\n")
     assert validate(inst, schedule).metrics.makespan == 4 and bfs(inst).lower_bound == 2
 
-    def lying(instance, *, time_limit: float | None = None):
+    def lying(instance, *, run=None):
         return Result("bfs", "optimal", schedule, lower_bound=2)
 
     monkeypatch.setitem(solvers.METHODS, "bfs", lying)

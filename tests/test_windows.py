@@ -1,6 +1,6 @@
 """The neighbourhood search of anytime: free windows prove, kept windows only shorten."""
-import time
 
+from bille.instances.run import Budget
 from bille.instances.schedule import Schedule
 from bille.solvers import solve, validate
 from bille.solvers.bracket import Bracket
@@ -21,14 +21,14 @@ def _relay():
 
 
 def _search(inst, bracket, kept: bool) -> Windows:
-    return Windows(inst, bracket, "minisat22", 6, 30.0, True, time.perf_counter() + 60, kept=kept)
+    return Windows(inst, bracket, "minisat22", 6, 30.0, True, Budget(60), kept=kept)
 
 
 def test_a_kept_window_that_cannot_shorten_proves_no_bound():
     inst, best = _relay()
     bracket = Bracket(lower=1, best=best)
     search = _search(inst, bracket, kept=True)
-    assert search.shorten(best, 0, best.makespan, time.perf_counter() + 30) == UNSAT
+    assert search.shorten(best, 0, best.makespan, Budget(30)) == UNSAT
     assert bracket.lower == 1 and "proved_bound" not in search.counts  # the optimum is 3, not 6
 
 
@@ -36,7 +36,7 @@ def test_the_free_window_over_the_same_schedule_finds_the_optimum_and_proves_it(
     inst, best = _relay()
     bracket = Bracket(lower=1, best=best)
     search = _search(inst, bracket, kept=False)
-    assert search.shorten(best, 0, best.makespan, time.perf_counter() + 30) == SAT
+    assert search.shorten(best, 0, best.makespan, Budget(30)) == SAT
     assert bracket.best.makespan == 3 == bracket.lower == search.counts["proved_bound"]
     assert validate(inst, solve(inst, "bfs").schedule).metrics.makespan == 3
 
@@ -49,7 +49,7 @@ def test_kept_windows_shorten_where_they_can():
     assert best.makespan == 6
     bracket = Bracket(lower=1, best=best)
     search = _search(inst, bracket, kept=True)
-    assert search.shorten(best, 0, best.makespan, time.perf_counter() + 30) == SAT
+    assert search.shorten(best, 0, best.makespan, Budget(30)) == SAT
     assert bracket.best.makespan == 4 and bracket.lower == 1
     assert validate(inst, Schedule.from_ids(inst, bracket.best.ids)).valid
 
@@ -73,7 +73,7 @@ def test_a_horizon_decided_ahead_of_the_bound_search():
     best = from_schedule(inst, sched("east east west east east east"), "detour")
     bracket = Bracket(lower=2, best=best)
     child = _Child(2, {0: 0.001, 1: 0.001})  # refuted horizons 0 and 1, now on 2
-    ahead = Ahead(inst, "cpsat", bracket, child, time.perf_counter() + 60)
+    ahead = Ahead(inst, "cpsat", bracket, child, Budget(60))
     assert ahead.pick()[0] == 5  # the highest below the best schedule's 6 steps
     ahead.run(*ahead.pick())
     assert bracket.best.makespan <= 5 and validate(inst, Schedule.from_ids(inst, bracket.best.ids)).valid
@@ -91,7 +91,7 @@ def test_no_horizon_is_decided_ahead_before_two_are_refuted():
 
     inst = make(".....\nTTTTT\n.....", [{"at": [0, 1]}], moveset="point", robot_goals=[[4, 1]])
     bracket = Bracket(lower=2, best=from_schedule(inst, sched("east east west east east east"), "detour"))
-    assert Ahead(inst, "cpsat", bracket, _Child(2, {1: 0.001}), time.perf_counter() + 60).pick() is None
+    assert Ahead(inst, "cpsat", bracket, _Child(2, {1: 0.001}), Budget(60)).pick() is None
     # a horizon expected to take longer than the time left is not tried
     slow = _Child(2, {0: 50.0, 1: 100.0})
-    assert Ahead(inst, "cpsat", bracket, slow, time.perf_counter() + 60).pick() is None
+    assert Ahead(inst, "cpsat", bracket, slow, Budget(60)).pick() is None

@@ -10,18 +10,18 @@ import click
 
 from bille.solvers import METHODS
 from bille.solvers.options import _AT_LEAST
-from bille.solvers.registry import ABOUT, CLASSIC
+from bille.solvers.registry import ABOUT, CLASSIC, DEFAULT_TIME_LIMIT
 
 from .common import EXIT_OK
 
-INTERNAL = ("instance", "bounds", "progress", "on_schedule", "on_bound")
+INTERNAL = ("instance", "bounds", "progress", "on_schedule", "on_bound", "run")
 
 
 def options_of(method: str) -> list[tuple[str, str, str]]:
     """``(name, type, default and range)`` of each option of ``method``."""
     plan = METHODS[method]
     hints = typing.get_type_hints(plan)
-    rows = []
+    rows = [("time_limit", "float or none", f"{DEFAULT_TIME_LIMIT.get(method, 'none')} (> 0 s)")]
     for name, param in inspect.signature(plan).parameters.items():
         if name in INTERNAL:
             continue
@@ -29,7 +29,7 @@ def options_of(method: str) -> list[tuple[str, str, str]]:
         kind = getattr(hint, "__name__", None) or str(hint).replace("typing.", "")
         default = "none" if param.default is None else str(param.default).lower() \
             if isinstance(param.default, bool) else str(param.default)
-        low = "> 0 s" if name == "time_limit" else f">= {_AT_LEAST[name]}" if name in _AT_LEAST else ""
+        low = f">= {_AT_LEAST[name]}" if name in _AT_LEAST else ""
         rows.append((name, kind.replace(" | None", " or none"), default + (f" ({low})" if low else "")))
     return rows
 

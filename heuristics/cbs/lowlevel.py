@@ -115,7 +115,7 @@ def allowed(table: Table, classic: bool, p: int, q: int, cells: frozenset, t: in
 _UNSEEN = (NEVER, NEVER)
 
 
-class Budget(Exception):
+class Stopped(Exception):
     """The low level ran past its expansion budget or the deadline."""
 
 
@@ -123,7 +123,7 @@ def search(agent: Agent, table: Table, avoid: Avoid | None, classic: bool, *,
            cost_cap: int = NEVER, poll: Callable[[], bool] | None = None, stats: dict | None = None) -> Path | None:
     """The least-cost path of ``agent`` under ``table`` (fewest conflicts with ``avoid`` among
     them), or None if none exists (or none of cost at most ``cost_cap``). ``poll`` is called every
-    1,024 expansions; when it returns True the search raises :class:`Budget`."""
+    1,024 expansions; when it returns True the search raises :class:`Stopped`."""
     dist, home, moves = agent.dist, agent.home, agent.moves
     start = agent.start
     if dist[start] >= UNREACHABLE:
@@ -151,7 +151,7 @@ def search(agent: Agent, table: Table, avoid: Avoid | None, classic: bool, *,
             break
         expanded += 1
         if poll is not None and expanded % 1024 == 0 and poll():
-            raise Budget
+            raise Stopped
         t1 = t + 1
         banned, edges = banned_at(t1), edges_at(t1)
         for a, q, cells in moves(p):

@@ -1,18 +1,17 @@
 """``cbs``: conflict-based search as a method of ``solve()``: options, proofs, result."""
 from __future__ import annotations
 
-import time
-
 import numpy as np
 
 from bille.instances import Instance, OptionError
 from bille.instances.grid import neighbour_table
 from bille.instances.moveset import Kind
 from bille.instances.result import Result
+from bille.instances.run import Run
 from bille.instances.schedule import Schedule
 
 from ..joint import NO_WALK, JointProblem, check_tables, require_path_planning
-from .lowlevel import Agent, Budget
+from .lowlevel import Agent, Stopped
 from .search import FOCALS, HEURISTICS, OBJECTIVES, Node, OutOfBudget, Settings, Tree
 
 def agents_of(problem: JointProblem) -> list[Agent]:
@@ -78,7 +77,7 @@ def closed_world(instance: Instance) -> bool:
 
 def plan(instance: Instance, *, objective: str = "sum-of-costs", w: float = 1.0, heuristic: str = "wdg",
          prioritize: bool = True, bypass: bool = True, target: bool = True, rectangle: bool = True,
-         corridor: bool = True, focal: str = "conflicts", time_limit: float | None = 60.0,
+         corridor: bool = True, focal: str = "conflicts", run: Run | None = None,
          max_nodes: int = 1_000_000) -> Result:
     """Conflict-based search on a path-planning instance (module docstring).
 
@@ -93,7 +92,9 @@ def plan(instance: Instance, *, objective: str = "sum-of-costs", w: float = 1.0,
     prioritize, bypass, target, rectangle, corridor : the improvements of :mod:`.search`
         (rectangle and corridor reasoning apply under classic collisions; rectangles to robots
         that move one cell at a time, corridors to robots whose every move can be undone).
-    time_limit : seconds; max_nodes : constraint-tree nodes expanded before giving up.
+    run : the run context (when its budget expires: status ``timeout``, with the lower bound
+        reached; ``solve()`` gives 60 s unless told otherwise; without one, no limit).
+    max_nodes : constraint-tree nodes expanded before giving up.
 
     On a map whose free cells are all tiles (no robot carrying) walking schedules are all the
     schedules there are (:func:`closed_world`), so the optimum is over every schedule and a robot
@@ -115,8 +116,7 @@ def plan(instance: Instance, *, objective: str = "sum-of-costs", w: float = 1.0,
     require_path_planning(instance, "cbs")
     _check_movesets(instance)
     check_tables(instance, "cbs")
-    began = time.perf_counter()
-    deadline = None if time_limit is None else began + time_limit
+    budget = (run or Run.limited()).budget
     problem = JointProblem.of(instance, "cbs")
     agents = agents_of(problem)
     closed = closed_world(instance)
@@ -124,12 +124,9 @@ def plan(instance: Instance, *, objective: str = "sum-of-costs", w: float = 1.0,
     stats: dict = {"objective": objective.replace("-", " ") + restriction, "w": w, "heuristic": heuristic,
                    "expanded": 0, "generated": 0, "low_expanded": 0}
 
-    def poll() -> bool:
-        return deadline is not None and time.perf_counter() > deadline
-
     settings = Settings(objective, heuristic, prioritize, bypass, target, rectangle, corridor and _reversible(instance),
                         w, focal, max_nodes)
-    tree = Tree(agents, instance.collisions == "classic", settings, poll, stats,
+    tree = Tree(agents, instance.collisions == "classic", settings, budget.expired, stats,
                 instance.width if _grid_steps(instance) else None)
     try:
         unreachable = problem.unreachable()
@@ -141,9 +138,9 @@ def plan(instance: Instance, *, objective: str = "sum-of-costs", w: float = 1.0,
             return _no_schedule(instance, closed, stats, "a robot cannot walk to its goal")
         stats["root_cost"] = root.g
         found = tree.run(root)
-    except (OutOfBudget, Budget):
+    except (OutOfBudget, Stopped):
         stats["lower_bound_" + objective.replace("-", "_")] = tree.lower
-        over = tree.poll is not None and poll()
+        over = budget.expired()
         stats["failure"] = "time limit" if over else f"node limit ({max_nodes} expanded)"
         return Result("cbs", "timeout" if over else "unsolved", stats=stats)
     except KeyboardInterrupt:
