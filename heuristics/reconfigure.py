@@ -72,12 +72,14 @@ def plan(instance: Instance, *, motion: str | Motion = "temporal-astar", load_tr
     context (when its budget expires, status ``timeout``; default: no limit).
     """
     name = motion if isinstance(motion, str) else motion.name
+    budget = (run or Run.limited()).budget
     try:
         loop = Loop(instance, motion=motion, load_transfer=load_transfer, d_tr=d_tr, epsilon=epsilon,
-                    horizon=horizon, budget=(run or Run.limited()).budget, max_steps=max_steps, max_shifts=max_shifts,
+                    horizon=horizon, budget=budget, max_steps=max_steps, max_shifts=max_shifts,
                     priorities=priorities, active=active)
     except NoSequence as exc:  # the loop gives up before its first step
-        return to_result(instance, method or name, "unsolved", None, stats={"failure": str(exc)})
+        status = "timeout" if budget.expired() else "unsolved"
+        return to_result(instance, method or name, status, None, stats={"failure": str(exc)})
     return loop.run(method or name)
 
 

@@ -147,7 +147,7 @@ def derive(instance: Instance, *, dead_ends: int = 200, max_sets: int | None = N
     empty = sorted(np.flatnonzero(tiles & ~goal).tolist())
     fill = sorted(np.flatnonzero(goal & ~tiles).tolist())
     graph = instance.world.graphs[0]
-    order = _order(tiles, empty, fill, graph, w, h, dead_ends)
+    order = _order(tiles, empty, fill, graph, w, h, dead_ends, budget)
     if order is None:
         graphs = [g for g, _ in instance.world.groups]  # any robot type may serve a job
         search = _Setting(tiles, goal, instance.start.obstacles, graphs, w, h, max_sets, budget)
@@ -205,9 +205,9 @@ def _carry(p: int, q: int, w: int) -> int:
 
 
 def _order(tiles: np.ndarray, empty: list[int], fill: list[int], graph, w: int, h: int,
-           dead_ends: int) -> list | None:
+           dead_ends: int, budget: Budget | None = None) -> list | None:
     """Depth first over (pick, place) pairs, the shortest runnable carry first; gives up after
-    ``dead_ends``."""
+    ``dead_ends``, or once ``budget`` expires."""
     nbr = neighbour_table(w, h)
     dead = 0
 
@@ -219,7 +219,7 @@ def _order(tiles: np.ndarray, empty: list[int], fill: list[int], graph, w: int, 
         critical = _critical(tiles, empty, fill, graph)
         pairs = sorted((critical[p], _carry(p, q, w), p, q) for p in empty for q in fill if not cut[p])
         for *_, p, q in pairs:
-            if dead >= dead_ends:
+            if dead >= dead_ends or (budget is not None and budget.expired()):
                 return None
             if not runnable(tiles, cut, p, q, nbr, graph, w, h):
                 continue
