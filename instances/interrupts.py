@@ -16,8 +16,9 @@ goes to another thread that does not block it (numpy's BLAS workers), and python
 had it been installed, would jump from that thread into the main thread's stack (it crashed the
 process in about 1 run in 10). The Ctrl-C is raised as an ordinary ``KeyboardInterrupt`` once the
 block is done, at a point where Python code can unwind and keep what the run found. Outside the
-main thread (where Python delivers no signal) and where a handler other than Python's default one
-is installed, the block runs as it is. Threads that run solvers block SIGINT for good
+main thread (where Python delivers no signal) the block runs as it is; where a handler other than
+Python's default one is installed (:func:`cancelling`'s, which raises nothing), python-sat is
+still told it is not in the main thread, and the signal goes to that handler. Threads that run solvers block SIGINT for good
 (:func:`quiet_thread`), so that a terminal's Ctrl-C always reaches the main thread.
 """
 from __future__ import annotations
