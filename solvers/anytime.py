@@ -92,7 +92,7 @@ def plan(instance: Instance, *, run: Run | None = None, window: int = 8, slice: 
         windows (default; where the platform cannot fork, or in a daemonic process, which may not
         start one, the two take turns). ``stats.bound_search`` says which.
     solver : the neighbourhood search's back end: a python-sat name (default ``minisat22``, which
-        can be interrupted at a window's deadline) or ``cpsat`` (one worker, the part's length
+        can be interrupted when a window's budget ends) or ``cpsat`` (one worker, the part's length
         minimized in one solve). docs/decisions.md has the measurements behind the defaults.
     bound_solver : the bound search's back end: ``cpsat`` (the default, one worker) or a
         python-sat name.

@@ -116,7 +116,7 @@ _UNSEEN = (NEVER, NEVER)
 
 
 class Stopped(Exception):
-    """The low level ran past its expansion budget or the deadline."""
+    """The low level ran past its expansion cap, or the run's budget expired."""
 
 
 def search(agent: Agent, table: Table, avoid: Avoid | None, classic: bool, *,
