@@ -64,20 +64,23 @@ def test_a_budget_cancelled_from_another_thread_ends_the_solve_with_what_it_foun
     result = solve(inst, "anytime", time_limit=120, budget=budget, on_schedule=cancel_after_first)
     assert result.status == "interrupted" and found
     assert validate(inst, result.schedule).valid and result.lower_bound <= result.metrics.makespan
+    assert "improvements" in result.stats  # anytime ended as at its time limit, with its statistics
 
 
-def test_a_second_ctrl_c_unwinds_to_solve_which_keeps_what_was_told():
-    inst = load_instance(bundled_path("lt-1"))
-    sent = []
+def test_a_second_ctrl_c_unwinds_to_solve_which_keeps_what_was_told(monkeypatch):
+    from bille.instances.result import Result
+    from bille.solvers import METHODS
 
-    def twice(schedule):
-        if not sent:
-            sent.append(1)
-            os.kill(os.getpid(), signal.SIGINT)  # cancels
-            os.kill(os.getpid(), signal.SIGINT)  # unwinds
+    def spin(instance, *, run=None, on_bound=None):
+        on_bound(5)
+        os.kill(os.getpid(), signal.SIGINT)  # cancels the run
+        assert run.budget.cancelled
+        os.kill(os.getpid(), signal.SIGINT)  # unwinds from here
+        return Result("spin", "timeout", lower_bound=5, stats={"returned": True})
 
-    result = solve(inst, "anytime", time_limit=120, parallel=False, on_schedule=twice)
-    assert result.status == "interrupted" and validate(inst, result.schedule).valid
+    monkeypatch.setitem(METHODS, "temporal-astar", spin)
+    result = solve(load_instance(bundled_path("point-4")), "temporal-astar")
+    assert result.status == "interrupted" and "returned" not in result.stats and result.lower_bound == 5
 
 
 def test_looking_a_method_up_by_name_imports_nothing():
