@@ -11,27 +11,34 @@ from __future__ import annotations
 
 import heapq
 import itertools
-from bille.instances import Instance, OptionError
+from dataclasses import dataclass
+
+from bille.instances import Instance
+from bille.instances.options import MethodOptions, option
 from bille.instances.run import Run
 
 from .joint import NO_WALK, OBJECTIVE, JointProblem, OutOfTime, to_result, unwind
 
 
-def plan(instance: Instance, *, epsilon: float = 1.0, run: Run | None = None,
-         max_expansions: int = 5_000_000):
-    """Joint A*: minimum sum of costs (then makespan) on a fixed structure.
+@dataclass(frozen=True)
+class Options(MethodOptions):
+    """``epsilon``: weight of the heuristic (1 gives optimal plans); ``max_expansions``:
+    expansions before giving up with status ``unsolved``."""
 
-    Parameters
-    ----------
-    epsilon : weight of the heuristic (>= 1); 1 gives optimal plans.
-    run : the run context; when its budget expires, status ``timeout`` (default: no limit).
-    max_expansions : expansions before giving up with status ``unsolved``.
+    METHOD = "astar"
+    epsilon: float = option(1.0, at_least=1)
+    max_expansions: int = option(5_000_000, at_least=1)
+
+
+def plan(instance: Instance, options: Options | None = None, run: Run | None = None):
+    """Joint A*: minimum sum of costs (then makespan) on a fixed structure (:class:`Options`);
+    when the run's budget expires, status ``timeout`` (no run: no limit).
 
     A search that runs out of walking states says ``unsolved``, not ``infeasible``: a schedule
     that picks and places tiles (to make room, and back) is outside its search space.
     """
-    if epsilon < 1:
-        raise OptionError(f"astar: epsilon must be >= 1, got {epsilon}")
+    options = options or Options()
+    epsilon, max_expansions = options.epsilon, options.max_expansions
     budget = (run or Run.limited()).budget
     problem = JointProblem.of(instance, "astar")
     stats = {"objective": OBJECTIVE, "epsilon": epsilon, "expanded": 0, "generated": 0}

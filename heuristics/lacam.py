@@ -32,9 +32,11 @@ from collections import deque
 from dataclasses import dataclass, field
 
 from bille.instances import Instance, OptionError
+from bille.instances.options import option
 from bille.instances.run import Budget, Run, unlimited
 
 from .joint import NO_WALK, JointProblem, to_result
+from .loop_options import LoopOptions
 from .pibt import Bille, Classic, next_priorities
 from .refine import Paths, refine_once
 from .scatter import scatter
@@ -62,28 +64,34 @@ class _Node:
     edges: dict = field(default_factory=dict)  # successor node -> (joint action, cost)
 
 
-def plan(instance: Instance, *, objective: str = "makespan", run: Run | None = None,
-         improve: float = 1.0, max_nodes: int = 2_000_000, seed: int = 0):
-    """LaCAM* on a fixed structure (the method ``lacam`` hands an instance that moves tiles to
-    the reconfiguration loop with LaCAM* as its motion layer).
+@dataclass(frozen=True)
+class Options(LoopOptions):
+    """``objective``: ``makespan`` or ``sum-of-loss`` (module docstring; path planning only);
+    ``improve``: seconds spent improving the first schedule (0: stop at the first one), within
+    the run's budget; ``max_nodes``: configurations stored before giving up (``unsolved``) or
+    stopping the improvement; ``seed``: the generator's tie-breaking (results are repeatable for
+    a seed)."""
 
-    Parameters
-    ----------
-    objective : ``makespan`` or ``sum-of-loss`` (module docstring).
-    run : the run context; without a first schedule when its budget expires, status ``timeout``
-        (default: no limit).
-    improve : seconds spent improving the first schedule (0: stop at the first one), within
-        the run's budget.
-    max_nodes : configurations stored before giving up (``unsolved``) or stopping the improvement.
-    seed : the generator's tie-breaking (results are repeatable for a seed).
+    METHOD = "lacam"
+    objective: str = option("makespan", choices=OBJECTIVES)
+    improve: float = option(1.0, at_least=0)
+    max_nodes: int = option(2_000_000, at_least=1)
+    seed: int = option(0, at_least=0)
+
+
+def plan(instance: Instance, options: Options | None = None, run: Run | None = None):
+    """LaCAM* on a fixed structure (:class:`Options`; the method ``lacam`` hands an instance that
+    moves tiles to the reconfiguration loop with LaCAM* as its motion layer). Without a first
+    schedule when the run's budget expires, status ``timeout`` (no run: no limit).
 
     Status ``optimal`` (with ``stats["objective"]``) when the improvement exhausts the search
     space, ``feasible`` otherwise; ``unsolved`` when the space holds no walking schedule (a
     schedule that moves tiles out of the way and back is outside it).
     """
+    o = options or Options()
     problem = JointProblem.of(instance, "lacam")
-    status, steps, stats = joint_plan(problem, objective=objective, budget=(run or Run.limited()).budget, improve=improve,
-                                      max_nodes=max_nodes, seed=seed)
+    status, steps, stats = joint_plan(problem, objective=o.objective, budget=(run or Run.limited()).budget,
+                                      improve=o.improve, max_nodes=o.max_nodes, seed=o.seed)
     return to_result(instance, "lacam", status, steps, stats=stats)
 
 

@@ -24,32 +24,40 @@ from __future__ import annotations
 
 import heapq
 import itertools
+from dataclasses import dataclass
 
-from bille.instances import Instance, OptionError
+from bille.instances import Instance
+from bille.instances.options import option
 from bille.instances.run import Budget, Run, unlimited
 
 from .joint import NO_WALK, OBJECTIVE, JointProblem, OutOfTime, to_result, unwind
+from .loop_options import LoopOptions
 
 INF = (1 << 60, 0)
 
 
-def plan(instance: Instance, *, epsilon: float = 1.0, od: bool = True, run: Run | None = None,
-         max_expansions: int = 5_000_000):
-    """M*: minimum sum of costs (then makespan) on a fixed structure (the method ``mstar`` hands
-    an instance that moves tiles to the reconfiguration loop, :mod:`.reconfigure`, with M* as
-    its motion layer, which is not optimal).
+@dataclass(frozen=True)
+class Options(LoopOptions):
+    """``epsilon``: inflation of the heuristic (1 gives optimal plans); ``od``: expand coupled
+    robots one at a time (operator decomposition); ``max_expansions``: expansions (of vertices
+    and intermediate nodes) before ``unsolved``. The loop's options are for instances that move
+    tiles."""
 
-    Parameters
-    ----------
-    epsilon : inflation of the heuristic (>= 1); 1 gives optimal plans.
-    od : expand coupled robots one at a time (operator decomposition).
-    run : the run context; when its budget expires, status ``timeout`` (default: no limit).
-    max_expansions : expansions (of vertices and intermediate nodes) before ``unsolved``.
+    METHOD = "mstar"
+    epsilon: float = option(1.0, at_least=1)
+    od: bool = option(True)
+    max_expansions: int = option(5_000_000, at_least=1)
+
+
+def plan(instance: Instance, options: Options | None = None, run: Run | None = None):
+    """M*: minimum sum of costs (then makespan) on a fixed structure (:class:`Options`; the method
+    ``mstar`` hands an instance that moves tiles to the reconfiguration loop, :mod:`.reconfigure`,
+    with M* as its motion layer, which is not optimal). When the run's budget expires, status
+    ``timeout`` (no run: no limit).
     """
-    if epsilon < 1:
-        raise OptionError(f"mstar: epsilon must be >= 1, got {epsilon}")
+    o = options or Options()
     budget = (run or Run.limited()).budget
-    return _MStar(JointProblem.of(instance, "mstar"), epsilon, od, budget, max_expansions).run()
+    return _MStar(JointProblem.of(instance, "mstar"), o.epsilon, o.od, budget, o.max_expansions).run()
 
 
 def joint_plan(problem: JointProblem, *, epsilon: float = 1.0, od: bool = True, budget: Budget | None = None,

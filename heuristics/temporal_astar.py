@@ -19,37 +19,46 @@ giving up is not a proof that no schedule exists.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from bille.instances import Instance, OptionError
+from bille.instances.options import option
 from bille.instances.run import Run
 from bille.instances.rules import State, apply
 
 from .joint import JointProblem, to_result
+from .loop_options import LoopOptions
 from .spacetime import reservation_step
 
 
-def plan(instance: Instance, *, epsilon: float = 1.0, horizon: int = 5, run: Run | None = None,
-         max_steps: int | None = None, max_shifts: int | None = None, shift_priorities: bool = True,
-         priorities: list[int] | None = None):
-    """Temporal A* on a fixed structure (the method ``temporal-astar`` hands an instance that
-    moves tiles to the reconfiguration loop, :mod:`.reconfigure`, instead).
+@dataclass(frozen=True)
+class Options(LoopOptions):
+    """``epsilon``: heuristic weight of each robot's window search; ``horizon``: ``H``, the
+    number of steps each robot plans ahead; ``max_shifts``: budget of priority shifts (default:
+    4 m^2 for m robots; in the loop ``4 m^2 + 4 jobs``); ``shift_priorities``: False keeps ``Q``
+    fixed (for comparison): a blocked robot then ends the run (path planning only);
+    ``priorities``: the initial ``Q`` (default: robot ids in order). On a fixed structure
+    ``max_steps`` defaults to 4 x the robots' summed distances to their goals, at least 100."""
 
-    Parameters
-    ----------
-    epsilon : heuristic weight (>= 1) of each robot's window search.
-    horizon : ``H``, the number of steps each robot plans ahead (>= 1).
-    run : the run context; when its budget expires, status ``timeout`` (default: no limit).
-    max_steps : step bound (default: 4 x the robots' summed distances to their goals, at least 100).
-    max_shifts : budget of priority shifts (default: 4 m^2 for m robots).
-    shift_priorities : False keeps ``Q`` fixed (for comparison): a blocked robot then ends the run.
-    priorities : the initial ``Q`` (default: robot ids in order).
+    METHOD = "temporal-astar"
+    epsilon: float = option(1.0, at_least=1)
+    horizon: int = option(5, at_least=1)
+    max_shifts: int | None = option(None, at_least=0)
+    shift_priorities: bool = option(True)
+    priorities: list[int] | None = option(None)
+
+
+def plan(instance: Instance, options: Options | None = None, run: Run | None = None):
+    """Temporal A* on a fixed structure (:class:`Options`; the method ``temporal-astar`` hands an
+    instance that moves tiles to the reconfiguration loop, :mod:`.reconfigure`, instead). When
+    the run's budget expires, status ``timeout`` (no run: no limit).
     """
+    o = options or Options()
+    epsilon, horizon, max_steps, max_shifts = o.epsilon, o.horizon, o.max_steps, o.max_shifts
+    shift_priorities, priorities = o.shift_priorities, o.priorities
     m = instance.num_robots
-    if epsilon < 1:
-        raise OptionError(f"temporal-astar: epsilon must be >= 1, got {epsilon}")
-    if horizon < 1:
-        raise OptionError(f"temporal-astar: the horizon H must be >= 1, got {horizon}")
     Q = list(range(m)) if priorities is None else list(priorities)
     if sorted(Q) != list(range(m)):
         raise OptionError(f"temporal-astar: priorities must order the robot ids 0..{m - 1}, got {priorities}")

@@ -1,14 +1,14 @@
 """The answer: schedules and their files, the validator, metrics, results, and ``solve()``.
 
-``METHODS`` maps a method name to its planning function ``plan(instance, **options) -> Result``;
-the command line and the parametrized tests read it. A method's module is imported when the method
+``METHODS`` maps a method name to its record (:mod:`.registry`: the planning function
+``plan(instance, options, run) -> Result``, its options class, what it plans for and proves); the
+command line and the parametrized tests read it. A method's module is imported when the method
 is first looked up, and the bounds (scipy) when a solve needs them, so that commands that do not
 solve start fast.
 """
 from __future__ import annotations
 
 import dataclasses as _dataclasses
-import inspect as _inspect
 
 from bille.instances import Instance, OptionError
 from bille.instances.interrupts import cancelling as _cancelling
@@ -18,7 +18,7 @@ from bille.instances.run import Budget, Events, Run
 from bille.instances.schedule import Schedule, bind, dump_schedule, load_schedule, save_schedule, schedule_from_text
 
 from .options import check_options
-from .registry import CLASSIC, DEFAULT_TIME_LIMIT, METHODS
+from .registry import CLASSIC, METHODS
 from .validate import Report, validate
 
 __all__ = ["Bounds", "Budget", "CLASSIC", "METHODS", "Metrics", "OptionError", "Report", "Result", "Run", "STATUSES",
@@ -26,17 +26,20 @@ __all__ = ["Bounds", "Budget", "CLASSIC", "METHODS", "Metrics", "OptionError", "
            "schedule_from_text", "solve", "validate"]
 
 
-_DEFAULT = object()  # time_limit not given: the method's default (registry.DEFAULT_TIME_LIMIT)
+_DEFAULT = object()  # time_limit not given: the method's default (its record's time_limit)
 
 
 def solve(instance: Instance, method: str = "auto", progress=None, *, bound: bool = False,
-          time_limit: float | None = _DEFAULT, budget: Budget | None = None, **options) -> Result:
+          time_limit: float | None = _DEFAULT, budget: Budget | None = None, on_schedule=None, on_bound=None,
+          **options) -> Result:
     """Solve ``instance`` with ``method`` (a key of :data:`METHODS`; ``auto`` picks one by the
     instance, :mod:`.auto`).
 
-    Options are checked by type and range first (:mod:`.options`). ``progress``, a callable, is
-    handed to the methods that report progress (``anytime``; see its docstring), and told the
-    static bound as soon as it is known.
+    ``options`` are the method's (its options class, :mod:`.registry`), checked by type and
+    range before anything runs. ``progress``, ``on_schedule`` and ``on_bound`` (callables, or
+    None) are the run's events (:class:`~bille.instances.run.Events`): the methods that report
+    tell them (anytime: each shorter schedule, each higher bound, progress; the exact methods:
+    each horizon decided), and ``progress`` is told the static bound as soon as it is known.
 
     The static lower bound (:mod:`.bounds`) is computed once, here, where it is used: before the
     methods that search from it (those whose planning function takes ``bounds``: the exact and
@@ -74,41 +77,38 @@ def solve(instance: Instance, method: str = "auto", progress=None, *, bound: boo
                           f"rule only (classic: {', '.join(CLASSIC)})")
     whole = Budget() if budget is None else budget
     with _cancelling(whole):  # from here on (the method's libraries are loaded next), Ctrl-C cancels
-        plan = METHODS[method]
-        limit = DEFAULT_TIME_LIMIT.get(method) if time_limit is _DEFAULT else time_limit
-        options = check_options(method, plan, {**options, "time_limit": limit})
-        del options["time_limit"]
+        record = METHODS[method]
+        limit = record.time_limit if time_limit is _DEFAULT else time_limit
+        parsed = check_options(method, {**options, "time_limit": limit})
+        for name, tell in (("on_schedule", on_schedule), ("on_bound", on_bound), ("progress", progress)):
+            if tell is not None and not callable(tell):
+                raise OptionError(f"{method}: {name} must be a function, got {tell!r}")
         budget = whole.child(limit)
-        result, bounds, bound_s = _run(instance, method, plan, _inspect.signature(plan).parameters, options, budget,
-                                       progress, bound)
+        result, bounds, bound_s = _run(instance, record, parsed, budget, Events(on_schedule, on_bound, progress),
+                                       bound)
     if budget.cancelled and result.status in ("feasible", "timeout", "unsolved"):
         result = _dataclasses.replace(result, status="interrupted")
     return _checked(instance, method, result, bounds, bound_s, budget.elapsed())
 
 
-def _run(instance: Instance, method: str, plan, accepted, options: dict, budget: Budget, progress, bound: bool):
+def _run(instance: Instance, record, options, budget: Budget, told: Events, bound: bool):
     """The method's result, the static bound (or None) and the seconds it took: the body of
     :func:`solve` under its Ctrl-C handler."""
-    bounds, bound_s = None, None
-    kept = _Kept()
-    for name, keep in (("on_schedule", kept.schedule), ("on_bound", kept.bound)):
-        given = options.get(name)
-        if name in accepted and (given is None or callable(given)):  # kept here too, in case Ctrl-C ends it
-            options[name] = keep if given is None else _both(keep, given)
+    method, bounds, bound_s, progress = record.name, None, None, told.on_progress
+    kept = _Kept()  # what the method tells is kept here too, in case a KeyboardInterrupt ends it
+    events = Events(_both(kept.schedule, told.on_schedule), _both(kept.bound, told.on_bound), progress)
+    internal = {}
     try:
-        if "bounds" in accepted:  # the method searches from the bound: first, and it gets the time left
+        if record.bound:  # the method searches from the bound: first, and it gets the time left
             bounds, bound_s = _static_bound(instance, budget, progress)
-            options["bounds"] = bounds
-        if progress is not None and "progress" in accepted:
-            options["progress"] = progress
-        if "run" in accepted:
-            options["run"] = Run(budget, Events(options.get("on_schedule"), options.get("on_bound"), progress))
+            internal["bounds"] = bounds
+        before = "computing the lower bound" if record.bound else "before the method ran"
         if budget.cancelled:
-            result = Result(method, "interrupted", stats={"failure": "interrupted computing the lower bound"})
+            result = Result(method, "interrupted", stats={"failure": f"interrupted {before}"})
         elif budget.expired():
-            result = Result(method, "timeout", stats={"failure": "the time limit ran out computing the lower bound"})
+            result = Result(method, "timeout", stats={"failure": f"the time limit ran out {before}"})
         else:
-            result = plan(instance, **options)
+            result = record(instance, options, Run(budget, events), **internal)
     except KeyboardInterrupt:  # the method let it through: what it told before is kept
         result = kept.result(instance, method)
     if bound and bounds is None and result.status != "interrupted" and not budget.cancelled:
@@ -137,6 +137,9 @@ class _Kept:
 
 
 def _both(first, second):
+    if second is None:
+        return first
+
     def tell(value) -> None:
         first(value)
         second(value)

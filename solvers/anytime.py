@@ -56,12 +56,14 @@ seconds spent on each search.
 from __future__ import annotations
 
 import multiprocessing
+from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
 
-from bille.encodings.backend import SAT_SOLVERS, SOLVERS
+from bille.encodings.backend import SOLVERS
 from bille.instances import Instance, OptionError
+from bille.instances.options import MethodOptions, option
 from bille.instances.result import Result
 from bille.instances.rules import goal_violation
 from bille.instances.run import Budget, Run
@@ -74,54 +76,56 @@ from .rise import FORK, Ahead, Background, Rise
 from .windows import Windows
 
 
-def plan(instance: Instance, *, run: Run | None = None, window: int = 8, slice: float = 2.0,
-         parallel: bool = True, solver: str = "minisat22", bound_solver: str = "cpsat", swap: bool = True,
-         incumbent: Schedule | None = None, bounds: Bounds | None = None, progress: Callable | None = None,
-         on_schedule: Callable | None = None, on_bound: Callable | None = None) -> Result:
-    """Anytime certified solving (module docstring).
+@dataclass(frozen=True)
+class AnytimeOptions(MethodOptions):
+    """Options of anytime certified solving.
 
-    Parameters
-    ----------
-    run : the run context: its budget covers the whole run (``solve()`` gives 60 s unless told
-        otherwise; without one, no limit).
-    window : the first window length of the neighbourhood search, in steps (default 8).
-    slice : seconds the first window may take (each undecided window gives the next half as much
-        again); without ``parallel``, also the seconds each search runs before the other takes its
-        turn (default 2).
-    parallel : raise the bound in a child process, on a second core, while the parent searches
-        windows (default; where the platform cannot fork, or in a daemonic process, which may not
-        start one, the two take turns). ``stats.bound_search`` says which.
-    solver : the neighbourhood search's back end: a python-sat name (default ``minisat22``, which
-        can be interrupted when a window's budget ends) or ``cpsat`` (one worker, the part's length
-        minimized in one solve). docs/decisions.md has the measurements behind the defaults.
-    bound_solver : the bound search's back end: ``cpsat`` (the default, one worker) or a
-        python-sat name.
-    swap : a window may end with interchangeable robots (one moveset, no goal cell) in one
-        another's end states, the rest of the schedule permuted to match (default true).
-    incumbent : a schedule to start from instead of the heuristics' (must be valid).
-    progress : called with ``{"lower": ..., "best": ..., "elapsed": ...}`` whenever either
-        number changes (the command line draws a live line from it).
-    on_schedule, on_bound : called with each shorter schedule found (an
-        :class:`~.incumbent.Incumbent`) and each higher bound proved (:class:`.bracket.Bracket`).
+    ``window``: the first window length of the neighbourhood search, in steps. ``slice``:
+    seconds the first window may take (each undecided window gives the next half as much again);
+    without ``parallel``, also the seconds each search runs before the other takes its turn.
+    ``parallel``: raise the bound in a child process, on a second core, while the parent searches
+    windows (where the platform cannot fork, or in a daemonic process, which may not start one,
+    the two take turns; ``stats.bound_search`` says which). ``solver``: the neighbourhood
+    search's back end: a python-sat name (``minisat22``, which can be interrupted when a window's
+    budget ends) or ``cpsat`` (one worker, the part's length minimized in one solve);
+    docs/decisions.md has the measurements behind the defaults. ``bound_solver``: the bound
+    search's back end: ``cpsat`` (one worker) or a python-sat name. ``swap``: a window may end
+    with interchangeable robots (one moveset, no goal cell) in one another's end states, the
+    rest of the schedule permuted to match. ``incumbent``: a schedule to start from instead of
+    the heuristics' (must be valid)."""
+
+    METHOD = "anytime"
+    window: int = option(8, at_least=2)
+    slice: float = option(2.0, above=0)
+    parallel: bool = option(True)
+    solver: str = option("minisat22", choices=SOLVERS)
+    bound_solver: str = option("cpsat", choices=SOLVERS)
+    swap: bool = option(True)
+    incumbent: Schedule | None = option(None)
+
+
+def plan(instance: Instance, options: AnytimeOptions | None = None, run: Run | None = None, *,
+         bounds: Bounds | None = None) -> Result:
+    """Anytime certified solving (module docstring, :class:`AnytimeOptions`) within the run's
+    budget (``solve()`` gives 60 s unless told otherwise; no run: no limit). The run's events
+    hear of each shorter schedule found (an :class:`~.incumbent.Incumbent`), each higher bound
+    proved, and progress ``{"lower", "best", "elapsed"}`` whenever either changes (the command
+    line draws a live line from it). ``bounds``: the static bound, if already computed.
     """
-    for name, value in (("solver", solver), ("bound_solver", bound_solver)):
-        if value not in SOLVERS:
-            raise OptionError(f"anytime: unknown {name} {value!r} (expected cpsat or one of: {', '.join(SAT_SOLVERS)})")
-    if window < 2 or slice <= 0:
-        raise OptionError(f"anytime: window must be at least 2 and slice positive, got {window} and {slice}")
-    for name, value in (("on_schedule", on_schedule), ("on_bound", on_bound)):
-        if value is not None and not callable(value):
-            raise OptionError(f"anytime: {name} must be a function, got {value!r}")
-    budget = (run or Run.limited()).budget.child()  # started now: the run's own clock
+    o = options or AnytimeOptions()
+    run = run or Run.limited()
+    budget = run.budget.child()  # started now: the run's own clock
     bounds = bounds or lower_bound(instance)
     bracket = Bracket(bounds.lower, budget)
-    report = None if progress is None else _reporter(bracket, progress)
-    for tell, subscribers in ((report, bracket.on_schedule), (report, bracket.on_bound), (on_schedule,
-                              bracket.on_schedule), (on_bound, bracket.on_bound)):
+    events = run.events
+    report = _reporter(bracket, events.on_progress) if events.on_progress is not None else None
+    for tell, subscribers in ((report, bracket.on_schedule), (report, bracket.on_bound), (events.on_schedule,
+                              bracket.on_schedule), (events.on_bound, bracket.on_bound)):
         if tell is not None:
             subscribers.append(tell)
-    search = _Anytime(instance, bracket, budget, window, slice, parallel, solver, bound_solver, swap, report)
-    return search.run(bounds, incumbent)
+    search = _Anytime(instance, bracket, budget, o.window, o.slice, o.parallel, o.solver, o.bound_solver, o.swap,
+                      report)
+    return search.run(bounds, o.incumbent)
 
 
 def _reporter(bracket: Bracket, progress: Callable) -> Callable:

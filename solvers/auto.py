@@ -27,11 +27,12 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import Callable
+from dataclasses import dataclass
 
 import numpy as np
 
 from bille.instances import Instance
+from bille.instances.options import MethodOptions
 from bille.instances.result import Result
 from bille.instances.run import Run
 
@@ -53,18 +54,19 @@ def joint_states(instance: Instance) -> int:
     return poses * math.comb(free, min(free, moving + 1))
 
 
-def plan(instance: Instance, *, run: Run | None = None, bounds=None, progress: Callable | None = None) -> Result:
-    """The brute force with proof on a small joint state space, anytime solving otherwise
-    (module docstring); ``stats.auto`` says which method ran and why.
+@dataclass(frozen=True)
+class AutoOptions(MethodOptions):
+    """auto takes no options: it picks a method and runs it with that method's defaults."""
 
-    Parameters
-    ----------
-    run : the run context: its budget covers the whole run (``solve()`` gives 60 s unless told
-        otherwise; without one, no limit).
-    bounds, progress : from ``solve()``: the static bound, handed on with what the brute force
-        proved, and the progress callback of the anytime method.
-    """
-    from . import anytime, bfs, registry
+    METHOD = "auto"
+
+
+def plan(instance: Instance, options: AutoOptions | None = None, run: Run | None = None, *, bounds=None) -> Result:
+    """The brute force with proof on a small joint state space, anytime solving otherwise
+    (module docstring); ``stats.auto`` says which method ran and why. The run's budget covers
+    the whole run (``solve()`` gives 60 s unless told otherwise; no run: no limit); ``bounds``:
+    the static bound from ``solve()``, handed on with what the brute force proved."""
+    from . import anytime, bfs
 
     run = run or Run.limited()
     budget = run.budget
@@ -75,9 +77,8 @@ def plan(instance: Instance, *, run: Run | None = None, bounds=None, progress: C
         found = bfs.plan(instance, run=run)
         return _told(found, {"method": "bfs", "why": "classic collisions with tiles to move: the brute force, the "
                                                    "method that plans them"})
-    fallback = "anytime"
     if size > SMALL:
-        chosen = {"method": fallback, "why": f"about {size:.1e} joint states, more than {SMALL:.0e}"}
+        chosen = {"method": "anytime", "why": f"about {size:.1e} joint states, more than {SMALL:.0e}"}
         lower = None
     else:
         part = budget.share(BFS_SHARE)
@@ -87,14 +88,11 @@ def plan(instance: Instance, *, run: Run | None = None, bounds=None, progress: C
         if found.status not in ("timeout", "unsolved"):
             return _told(found, {"method": "bfs", "why": why})
         lower = found.lower_bound
-        chosen = {"method": fallback, "why": f"{why}, ran out of its {share:.0f} s ({found.stats.get('failure')}, "
-                                             f"optimum above {lower - 1} steps); {fallback} with the rest"}
-    if fallback == "lacam":
-        result = registry.METHODS["lacam"](instance, run=run)
-    else:
-        if bounds is not None and lower is not None and lower > bounds.lower:
-            bounds = dataclasses.replace(bounds, lower=lower, parts={**bounds.parts, "brute force": lower})
-        result = anytime.plan(instance, run=run, bounds=bounds, progress=progress)
+        chosen = {"method": "anytime", "why": f"{why}, ran out of its {share:.0f} s ({found.stats.get('failure')}, "
+                                               f"optimum above {lower - 1} steps); anytime with the rest"}
+    if bounds is not None and lower is not None and lower > bounds.lower:
+        bounds = dataclasses.replace(bounds, lower=lower, parts={**bounds.parts, "brute force": lower})
+    result = anytime.plan(instance, run=run, bounds=bounds)
     if lower is not None and result.status != "infeasible" and (result.lower_bound or 0) < lower:
         result = dataclasses.replace(result, lower_bound=lower)
     return _told(result, chosen)

@@ -7,12 +7,14 @@ tested against, not a planner.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
 from itertools import product
 
 import numpy as np
 
-from bille.instances import Instance, OptionError
+from bille.instances import Instance
 from bille.instances.limits import CHECK_EVERY
+from bille.instances.options import MethodOptions, option
 from bille.instances.rules import State, apply, goal_violation
 from bille.instances.result import Result
 from bille.instances.run import Run
@@ -20,23 +22,28 @@ from bille.instances.schedule import Schedule
 from bille.instances.successors import candidate_actions, disjoint_products
 
 
-def plan(instance: Instance, *, run: Run | None = None, max_steps: int = 64,
-         max_states: int = 2_000_000) -> Result:
-    """Optimal-makespan schedule by breadth-first search.
+@dataclass(frozen=True)
+class Options(MethodOptions):
+    """``max_steps``: horizon cap; without a goal within it the status is ``unsolved`` with
+    lower bound ``max_steps + 1``. ``max_states``: give up (status ``unsolved``) after storing
+    this many states."""
 
-    Parameters
-    ----------
-    run : the run context; when its budget expires: status ``timeout`` (default: no limit).
-    max_steps : horizon cap; without a goal within it the status is ``unsolved`` with lower bound
-        ``max_steps + 1``. ``infeasible`` means the whole reachable state space was exhausted.
-    max_states : give up (status ``unsolved``) after storing this many states.
+    METHOD = "bfs"
+    max_steps: int = option(64, at_least=0)
+    max_states: int = option(2_000_000, at_least=1)
+
+
+def plan(instance: Instance, options: Options | None = None, run: Run | None = None) -> Result:
+    """Optimal-makespan schedule by breadth-first search (:class:`Options`); when the run's
+    budget expires, status ``timeout`` (no run: no limit). ``infeasible`` means the whole
+    reachable state space was exhausted.
 
     Whenever it stops, every state within the depth reached has been checked, so the lower bound
     it reports (that depth + 1) is proved. Interrupted (Ctrl-C), the level under way may not all
     be checked: status ``interrupted`` with the depth reached as the bound.
     """
-    if max_steps < 0 or max_states < 1:
-        raise OptionError("bfs: max_steps must be >= 0 and max_states >= 1")
+    options = options or Options()
+    max_steps, max_states = options.max_steps, options.max_states
     budget = (run or Run.limited()).budget.child()
     world = instance.world
     goal_tiles, goal_cells = instance.goal_tiles, instance.goal_cells
@@ -61,7 +68,10 @@ def plan(instance: Instance, *, run: Run | None = None, max_steps: int = 64,
 
     try:
         while frontier:
-            for s in frontier:
+            for n, s in enumerate(frontier, 1):
+                if n % CHECK_EVERY == 0 and budget.expired():  # levels below this one were checked
+                    return Result("bfs", "timeout", lower_bound=depth, stats=stats("time limit"),
+                                  time_s=budget.elapsed())
                 if goal_violation(world, s, goal_tiles, goal_cells, depth) is None:
                     schedule = _unwind(instance, parent, s)
                     return Result("bfs", "optimal", schedule, lower_bound=depth, stats=stats(),

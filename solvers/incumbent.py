@@ -164,7 +164,7 @@ def complete_search(instance: Instance, budget: Budget) -> tuple[Incumbent | Non
     """
     compact_s = max(0.05, min(2.0, 0.1 * budget.left()))  # its schedules are mostly waits
     if not instance.is_reconfiguration:
-        found = lacam.plan(instance, run=Run(budget), improve=0.0)
+        found = lacam.plan(instance, lacam.Options(improve=0.0), Run(budget))
         if found.schedule is not None:
             return _compacted_result(instance, found, "lacam", budget.child(compact_s)), False
     if instance.collisions == "classic" or budget.expired():
@@ -229,7 +229,7 @@ def _run(instance: Instance, how, budget: Budget, improve: bool):
         return reconfigure.plan(instance, motion=motion, load_transfer=transfer, active=active, run=Run(budget),
                                 method=motion)
     if how == "lacam":
-        return lacam.plan(instance, run=Run(budget), improve=min(1.0, budget.left() / 2) if improve else 0.0)
+        return lacam.plan(instance, lacam.Options(improve=min(1.0, budget.left() / 2) if improve else 0.0), Run(budget))
     if instance.collisions == "classic":
         return None
     return temporal_astar.plan(instance, run=Run(budget))

@@ -1,16 +1,24 @@
-"""The method registry: method name -> ``plan(instance, **options) -> Result``.
+"""The method registry: one record per method (:class:`Method`), in the order shown to users.
 
-An explicit table, in the order shown to users, of where each planning function lives
-(``"module:function"``): a method's module, and the libraries it needs (OR-Tools, python-sat),
-are imported when the method is first looked up, not when the command line starts. The paper's planners walk on a fixed structure;
-on an instance that moves tiles, ``temporal-astar`` and ``mstar`` are the motion layer of the
-reconfiguration loop (:mod:`bille.heuristics.reconfigure`). Which function serves an instance is
-decided here, not by the planners.
+A record says where the method's planning function ``plan(instance, options, run) -> Result``
+and its options class (:class:`~bille.instances.options.MethodOptions`) live (``"module:name"``:
+a method's module, and the libraries it needs (OR-Tools, python-sat), are imported when the method
+is first used, not when the command line starts), what it plans for and proves, whether it plans
+under classic collisions, whether it searches from the static bound (``solve()`` then computes it
+first and hands it over), and its default time limit. ``bille methods``, ``-O help``, ``solve()``
+and the parametrized tests read the records.
+
+The paper's planners walk on a fixed structure; on an instance that moves tiles,
+``temporal-astar``, ``mstar`` and ``lacam`` run the reconfiguration loop
+(:mod:`bille.heuristics.reconfigure`) with the planner as its motion layer. Which function serves
+an instance is decided here, not by the planners.
 """
 from __future__ import annotations
 
+import dataclasses
 import importlib
 from collections.abc import MutableMapping
+from dataclasses import dataclass
 from typing import Callable, Iterator
 
 from bille.instances import Instance, OptionError
@@ -18,41 +26,33 @@ from bille.instances.result import Result
 from bille.instances.run import Run
 
 
-def plan_temporal_astar(instance: Instance, *, epsilon: float = 1.0, horizon: int = 5,
-                        run: Run | None = None, max_steps: int | None = None,
-                        max_shifts: int | None = None, shift_priorities: bool = True,
-                        priorities: list[int] | None = None, load_transfer: bool = False,
-                        d_tr: int = 5, active: list[int] | None = None) -> Result:
+def plan_temporal_astar(instance: Instance, options=None, run: Run | None = None) -> Result:
     """Temporal A* (:func:`bille.heuristics.temporal_astar.plan`); on an instance that moves tiles,
-    the reconfiguration loop with Temporal A* as its motion layer (``load_transfer``, ``d_tr``:
-    equations (1)-(3) of the paper; ``active``: the robots that take jobs)."""
+    the reconfiguration loop with Temporal A* as its motion layer."""
     from bille.heuristics import reconfigure, temporal_astar
 
+    o = options or temporal_astar.Options()
     if instance.is_reconfiguration:
-        if not shift_priorities:
+        if not o.shift_priorities:
             raise OptionError("temporal-astar: shift_priorities=false is for path planning only")
-        return reconfigure.plan(instance, motion="temporal-astar", load_transfer=load_transfer, d_tr=d_tr,
-                                epsilon=epsilon, horizon=horizon, run=run, max_steps=max_steps,
-                                max_shifts=max_shifts, priorities=priorities, active=active)
-    _loop_only("temporal-astar", active=active)
-    return temporal_astar.plan(instance, epsilon=epsilon, horizon=horizon, run=run,
-                               max_steps=max_steps, max_shifts=max_shifts, shift_priorities=shift_priorities,
-                               priorities=priorities)
+        return reconfigure.plan(instance, motion="temporal-astar", load_transfer=o.load_transfer, d_tr=o.d_tr,
+                                epsilon=o.epsilon, horizon=o.horizon, run=run, max_steps=o.max_steps,
+                                max_shifts=o.max_shifts, priorities=o.priorities, active=o.active)
+    o.loop_only()
+    return temporal_astar.plan(instance, o, run)
 
 
-def plan_mstar(instance: Instance, *, epsilon: float = 1.0, od: bool = True, run: Run | None = None,
-               max_expansions: int = 5_000_000, load_transfer: bool = False, d_tr: int = 5,
-               max_steps: int | None = None, active: list[int] | None = None) -> Result:
+def plan_mstar(instance: Instance, options=None, run: Run | None = None) -> Result:
     """M* (:func:`bille.heuristics.mstar.plan`); on an instance that moves tiles, the
-    reconfiguration loop with M* as its motion layer (``load_transfer``, ``d_tr``, ``max_steps``,
-    ``active`` as for the loop)."""
+    reconfiguration loop with M* as its motion layer."""
     from bille.heuristics import mstar, reconfigure
 
+    o = options or mstar.Options()
     if instance.is_reconfiguration:
-        return reconfigure.plan(instance, motion="mstar", load_transfer=load_transfer, d_tr=d_tr, epsilon=epsilon,
-                                run=run, max_steps=max_steps, active=active)
-    _loop_only("mstar", active=active)
-    return mstar.plan(instance, epsilon=epsilon, od=od, run=run, max_expansions=max_expansions)
+        return reconfigure.plan(instance, motion="mstar", load_transfer=o.load_transfer, d_tr=o.d_tr,
+                                epsilon=o.epsilon, run=run, max_steps=o.max_steps, active=o.active)
+    o.loop_only()
+    return mstar.plan(instance, o, run)
 
 
 # of the time limit, at most, for the loop before the complete search takes over: the loop
@@ -62,9 +62,7 @@ def plan_mstar(instance: Instance, *, epsilon: float = 1.0, od: bool = True, run
 LOOP_SHARE = 0.5
 
 
-def plan_lacam(instance: Instance, *, objective: str = "makespan", run: Run | None = None,
-               improve: float = 1.0, max_nodes: int = 2_000_000, seed: int = 0, load_transfer: bool = False,
-               d_tr: int = 5, max_steps: int | None = None, active: list[int] | None = None) -> Result:
+def plan_lacam(instance: Instance, options=None, run: Run | None = None) -> Result:
     """LaCAM* (:func:`bille.heuristics.lacam.plan`). On an instance that moves tiles, the
     reconfiguration loop with LaCAM* as its motion layer (``load_transfer``, ``d_tr``,
     ``max_steps``, ``active`` as for the loop), and where the loop gives up, or runs out of its
@@ -75,104 +73,123 @@ def plan_lacam(instance: Instance, *, objective: str = "makespan", run: Run | No
     and ``seed`` for the searches over configurations."""
     from bille.heuristics import lacam, lacam_states, reconfigure
 
+    o = options or lacam.Options()
     if not instance.is_reconfiguration:
-        _loop_only("lacam", active=active)
-        return lacam.plan(instance, objective=objective, run=run, improve=improve,
-                          max_nodes=max_nodes, seed=seed)
+        o.loop_only()
+        return lacam.plan(instance, o, run)
     if instance.collisions == "classic":
         raise OptionError(f"lacam: instance '{instance.name}' moves tiles under classic collisions; "
                           "the reconfiguration loop plans under the Bill-E rule only")
-    if objective != "makespan":
-        raise OptionError(f"lacam: objective '{objective}' is for path planning; a reconfiguration is "
+    if o.objective != "makespan":
+        raise OptionError(f"lacam: objective '{o.objective}' is for path planning; a reconfiguration is "
                           "planned for its makespan")
     run = run or Run.limited()
-    loop = reconfigure.plan(instance, motion="lacam", load_transfer=load_transfer, d_tr=d_tr,
-                            run=run.part(run.budget.share(LOOP_SHARE)), max_steps=max_steps, active=active,
+    loop = reconfigure.plan(instance, motion="lacam", load_transfer=o.load_transfer, d_tr=o.d_tr,
+                            run=run.part(run.budget.share(LOOP_SHARE)), max_steps=o.max_steps, active=o.active,
                             method="lacam")
     if loop.status not in ("unsolved", "timeout") or run.budget.expired():
         return loop
-    whole = lacam_states.plan(instance, run=run, improve=improve, max_nodes=max_nodes, seed=seed)
+    whole = lacam_states.plan(instance, run=run, improve=o.improve, max_nodes=o.max_nodes, seed=o.seed)
     whole.stats["loop"] = {"status": loop.status, "failure": loop.stats.get("failure"),
                            "steps": loop.stats.get("steps", 0)}
     return whole
 
 
-def _loop_only(method: str, **options) -> None:
-    """Options of the reconfiguration loop given for path planning: one clear error."""
-    for name, value in options.items():
-        if value is not None:
-            raise OptionError(f"{method}: {name} is for instances that move tiles (the reconfiguration loop)")
+@dataclass(frozen=True)
+class Method:
+    """One method: where its planning function and options class live (``"module:name"``),
+    what it plans for and what it proves (``bille methods``), whether it plans under classic
+    collisions, whether it searches from the static bound (``solve()`` computes it first and
+    hands it over as ``bounds``), the seconds it gets without a time limit given (None: no
+    limit), and whether it needs one (its parts take shares of it). Calling a record runs the
+    method: ``record(instance, options, run)``."""
+
+    name: str
+    plan_at: str
+    options_at: str
+    plans: str
+    proves: str
+    classic: bool = False
+    bound: bool = False
+    time_limit: float | None = None
+    limit_required: bool = False
+    function: Callable[..., Result] | None = None  # set where a test replaces the method
+
+    def plan(self) -> Callable[..., Result]:
+        return self.function or _load(self.plan_at)
+
+    def options(self) -> type:
+        return _load(self.options_at)
+
+    def __call__(self, instance: Instance, options=None, run: Run | None = None, **internal) -> Result:
+        return self.plan()(instance, options, run, **internal)
 
 
-ABOUT = {  # method -> (what it plans for, what it proves); `bille methods` and `-O help` print them
-    "auto": ("the method the instance calls for, named in its output: the brute force on tiny state spaces, "
-             "cbs on classic MAPF, anytime otherwise", "what the method it ran proves"),
-    "astar": ("least sum of costs (then makespan) over walking-only schedules, on a fixed structure",
-              "optimal with epsilon 1"),
-    "cbs": ("least sum of costs (or makespan) on a fixed structure, classic or Bill-E collisions; see docs/cbs.md",
-            "optimal with w 1 (over every schedule where no free cell touches a tile); a lower bound on the "
-            "sum of costs otherwise"),
-    "mstar": ("as astar, by subdimensional expansion; on a reconfiguration, the loop's motion layer",
-              "optimal with epsilon 1 on a fixed structure; nothing on a reconfiguration"),
-    "temporal-astar": ("the paper's prioritized planner in a window of H steps; on a reconfiguration, the loop's "
-                       "motion layer", "nothing (feasible schedules)"),
-    "lacam": ("LaCAM*: complete and anytime; on a reconfiguration, the loop then a search over whole states",
-              "optimal walking makespan when its search space is exhausted; infeasible when the whole-state "
-              "search is"),
-    "cpsat": ("least makespan, by the time-expanded model on CP-SAT; then tiles traveled",
-              "optimal makespan; a lower bound when it stops early"),
-    "sat": ("least makespan, by the time-expanded model on a SAT solver (python-sat)",
-            "optimal makespan; a lower bound when it stops early"),
-    "anytime": ("a schedule at once, then shorter ones, while a lower bound rises", "the makespan's lower bound; "
-                "optimal when the two meet (the certified gap otherwise)"),
-    "bfs": ("least makespan by breadth-first search over joint states (tiny instances)", "optimal makespan"),
-}
+def _load(where: str):
+    module, _, name = where.partition(":")
+    return getattr(importlib.import_module(module), name)
 
-# the seconds a method gets from solve() without a time limit given (None: no limit)
-DEFAULT_TIME_LIMIT = {"auto": 60.0, "cbs": 60.0, "anytime": 60.0}
-
-CLASSIC = ("auto", "astar", "cbs", "lacam", "bfs")  # the methods that plan under classic collisions (docs/rules.md)
 
 class Registry(MutableMapping):
-    """Method name -> planning function, each imported from ``"module:function"`` when it is
-    first looked up. Iterating gives the names without importing anything; a function may also
-    be set directly (tests replace a method this way)."""
+    """Method name -> :class:`Method`. Looking a record up imports nothing; a planning function
+    set in place of a record (tests replace a method this way) keeps the record's other fields."""
 
-    def __init__(self, where: dict[str, str]) -> None:
-        self._where: dict[str, str | Callable[..., Result]] = dict(where)
+    def __init__(self, records: list[Method]) -> None:
+        self._records = {r.name: r for r in records}
 
-    def __getitem__(self, name: str) -> Callable[..., Result]:
-        plan = self._where[name]
-        if isinstance(plan, str):
-            module, _, function = plan.partition(":")
-            plan = self._where[name] = getattr(importlib.import_module(module), function)
-        return plan
+    def __getitem__(self, name: str) -> Method:
+        return self._records[name]
 
-    def __setitem__(self, name: str, plan: Callable[..., Result]) -> None:
-        self._where[name] = plan
+    def __setitem__(self, name: str, value: Method | Callable[..., Result]) -> None:
+        self._records[name] = value if isinstance(value, Method) else dataclasses.replace(self._records[name],
+                                                                                         function=value)
 
     def __delitem__(self, name: str) -> None:
-        del self._where[name]
+        del self._records[name]
 
     def __iter__(self) -> Iterator[str]:
-        return iter(self._where)
-
-    def __contains__(self, name) -> bool:  # the mapping's own test would import the method
-        return name in self._where
+        return iter(self._records)
 
     def __len__(self) -> int:
-        return len(self._where)
+        return len(self._records)
 
 
-METHODS = Registry({
-    "auto": "bille.solvers.auto:plan",
-    "astar": "bille.heuristics.astar:plan",
-    "cbs": "bille.heuristics.cbs:plan",
-    "mstar": f"{__name__}:plan_mstar",
-    "temporal-astar": f"{__name__}:plan_temporal_astar",
-    "lacam": f"{__name__}:plan_lacam",
-    "cpsat": "bille.solvers.exact:plan_cpsat",
-    "sat": "bille.solvers.exact:plan_sat",
-    "anytime": "bille.solvers.anytime:plan",
-    "bfs": "bille.solvers.bfs:plan",
-})
+_H = "bille.heuristics"
+METHODS = Registry([
+    Method("auto", "bille.solvers.auto:plan", "bille.solvers.auto:AutoOptions",
+           "the method the instance calls for, named in its output: the brute force on tiny state spaces, "
+           "cbs on classic MAPF, anytime otherwise", "what the method it ran proves",
+           classic=True, bound=True, time_limit=60.0, limit_required=True),
+    Method("astar", f"{_H}.astar:plan", f"{_H}.astar:Options",
+           "least sum of costs (then makespan) over walking-only schedules, on a fixed structure",
+           "optimal with epsilon 1", classic=True),
+    Method("cbs", f"{_H}.cbs:plan", f"{_H}.cbs.method:Options",
+           "least sum of costs (or makespan) on a fixed structure, classic or Bill-E collisions; see docs/cbs.md",
+           "optimal with w 1 (over every schedule where no free cell touches a tile); a lower bound on the "
+           "sum of costs otherwise", classic=True, time_limit=60.0),
+    Method("mstar", f"{__name__}:plan_mstar", f"{_H}.mstar:Options",
+           "as astar, by subdimensional expansion; on a reconfiguration, the loop's motion layer",
+           "optimal with epsilon 1 on a fixed structure; nothing on a reconfiguration"),
+    Method("temporal-astar", f"{__name__}:plan_temporal_astar", f"{_H}.temporal_astar:Options",
+           "the paper's prioritized planner in a window of H steps; on a reconfiguration, the loop's motion layer",
+           "nothing (feasible schedules)"),
+    Method("lacam", f"{__name__}:plan_lacam", f"{_H}.lacam:Options",
+           "LaCAM*: complete and anytime; on a reconfiguration, the loop then a search over whole states",
+           "optimal walking makespan when its search space is exhausted; infeasible when the whole-state "
+           "search is", classic=True),
+    Method("cpsat", "bille.solvers.exact:plan_cpsat", "bille.solvers.exact:CpsatOptions",
+           "least makespan, by the time-expanded model on CP-SAT; then tiles traveled",
+           "optimal makespan; a lower bound when it stops early", bound=True),
+    Method("sat", "bille.solvers.exact:plan_sat", "bille.solvers.exact:SatOptions",
+           "least makespan, by the time-expanded model on a SAT solver (python-sat)",
+           "optimal makespan; a lower bound when it stops early", bound=True),
+    Method("anytime", "bille.solvers.anytime:plan", "bille.solvers.anytime:AnytimeOptions",
+           "a schedule at once, then shorter ones, while a lower bound rises",
+           "the makespan's lower bound; optimal when the two meet (the certified gap otherwise)",
+           bound=True, time_limit=60.0, limit_required=True),
+    Method("bfs", "bille.solvers.bfs:plan", "bille.solvers.bfs:Options",
+           "least makespan by breadth-first search over joint states (tiny instances)", "optimal makespan",
+           classic=True),
+])
+
+CLASSIC = tuple(name for name, record in METHODS.items() if record.classic)  # docs/rules.md

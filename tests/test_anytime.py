@@ -12,13 +12,14 @@ from bille.instances.moveset import Kind
 from bille.instances.run import Budget
 from bille.instances.schedule import Schedule, bind, save_schedule
 from bille.solvers import anytime, solve, validate
+from bille.solvers.bfs import Options as BfsOptions
 from bille.solvers.bfs import plan as bfs
 from helpers import make, sched
 from tinyworlds import tiny_instances
 
 OPTIMA = {}
 for _inst in tiny_instances(16, first_seed=500, max_robots=2):
-    _ref = bfs(_inst, max_states=20_000)
+    _ref = bfs(_inst, BfsOptions(max_states=20_000))
     if _ref.status == "optimal" and len(OPTIMA) < 6:
         OPTIMA[_inst] = _ref.lower_bound  # the brute force's proved optimum
 SOLVABLE = list(OPTIMA)

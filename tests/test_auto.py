@@ -89,7 +89,7 @@ def test_classic_mapf_hands_over_to_lacam_when_cbs_runs_out(monkeypatch):
     inst = make("T.T.\nTTTT\nT..T", [{"at": [0, 1]}, {"at": [3, 1]}], moveset="point", collisions="classic",
                 robot_goals=[[3, 1], [0, 1]])
     monkeypatch.setitem(__import__("bille.solvers.registry", fromlist=["METHODS"]).METHODS, "cbs",
-                        lambda instance, run: Result("cbs", "timeout", stats={"lower_bound_sum_of_costs": 7}))
+                        lambda instance, options, run: Result("cbs", "timeout", stats={"lower_bound_sum_of_costs": 7}))
     result = solve(inst, time_limit=20)
     assert result.stats["auto"]["method"] == "lacam" and result.stats["lower_bound_sum_of_costs"] == 7
     assert result.schedule is not None and validate(inst, result.schedule).valid

@@ -3,7 +3,7 @@ import pytest
 
 from bille.instances import OptionError
 from bille.solvers import METHODS, solve, validate
-from bille.solvers.bfs import plan
+from bille.solvers.bfs import Options, plan
 from helpers import make
 
 
@@ -44,7 +44,7 @@ def test_a_robot_that_cannot_turn_around_is_proved_infeasible():
 
 def test_limits_give_unsolved_with_a_proved_lower_bound():
     inst = make("TTTTTTTT", [{"at": [0, 0]}], moveset="point", robot_goals=[[7, 0]])
-    result = plan(inst, max_steps=3)  # the search's own proof: nothing within 3 steps
+    result = plan(inst, Options(max_steps=3))  # the search's own proof: nothing within 3 steps
     assert result.status == "unsolved" and result.lower_bound == 4 and result.schedule is None
     assert result.stats["failure"] == "step bound"
     assert solve(inst, "bfs", max_steps=3).lower_bound == 4  # the static bound only where asked for

@@ -86,7 +86,7 @@ def test_too_many_robots_for_the_planners_tables(tmp_path, rejects, monkeypatch)
     (["-m", "bfs", "-O", "time_limit=nan"], "option time_limit expects a finite number"),
     (["-m", "mstar", "-O", "epsilon=[1,2]"], "option epsilon expects a finite number"),
     (["-m", "sat", "-O", "solver=nosuchsolver"], "unknown solver 'nosuchsolver'"),
-    (["-m", "anytime", "-O", "solver=nosuchsolver"], "expected cpsat or one of"),
+    (["-m", "anytime", "-O", "solver=nosuchsolver"], "unknown solver 'nosuchsolver' (expected one of: cpsat,"),
     (["-m", "cpsat", "--time-limit", "nan"], "option time_limit expects a finite number"),
     (["-m", "cpsat", "--time-limit", "inf"], "option time_limit expects a finite number"),
     (["-m", "mstar", "--epsilon", "nan"], "option epsilon expects a finite number"),

@@ -4,8 +4,6 @@ import os
 import signal
 import threading
 
-import pytest
-
 from bille.instances import load_instance
 from bille.instances.bundled import bundled_path
 from bille.instances.run import Budget, Events, Run
@@ -71,8 +69,8 @@ def test_a_second_ctrl_c_unwinds_to_solve_which_keeps_what_was_told(monkeypatch)
     from bille.instances.result import Result
     from bille.solvers import METHODS
 
-    def spin(instance, *, run=None, on_bound=None):
-        on_bound(5)
+    def spin(instance, options=None, run=None):
+        run.events.bound(5)
         os.kill(os.getpid(), signal.SIGINT)  # cancels the run
         assert run.budget.cancelled
         os.kill(os.getpid(), signal.SIGINT)  # unwinds from here

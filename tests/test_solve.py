@@ -11,7 +11,6 @@ import signal
 import subprocess
 import sys
 import time
-from typing import Callable
 
 import numpy as np
 import pytest
@@ -59,7 +58,7 @@ def slow_bound(monkeypatch, clock):
 def spy_method(clock, seen, spends=0.0):
     """A method that takes the bound (as exact and anytime do), records what it was given and
     spends ``spends`` seconds on the fake clock."""
-    def plan(instance, *, run=None, bounds=None, progress=None) -> Result:
+    def plan(instance, options=None, run=None, *, bounds=None) -> Result:
         seen.append((run.budget.seconds(), None if bounds is None else bounds.lower))
         clock.now += spends
         return Result("spy", "timeout", lower_bound=None)
@@ -68,7 +67,7 @@ def spy_method(clock, seen, spends=0.0):
 
 def spy_heuristic(clock, seen, spends=0.0):
     """A method that does not take the bound (as the heuristics)."""
-    def plan(instance, *, run=None) -> Result:
+    def plan(instance, options=None, run=None) -> Result:
         seen.append(run.budget.seconds())
         clock.now += spends
         return Result("spy", "unsolved", stats={"failure": "deadlock"})
@@ -192,7 +191,7 @@ def test_an_interrupted_method_keeps_what_it_found(monkeypatch, cli, capsys, tmp
     inst = load_instance(bundled_path("corridor-2"))
     found = solve(inst, "temporal-astar")
 
-    def stopped(instance, *, run=None, bounds=None, progress=None) -> Result:
+    def stopped(instance, options=None, run=None, *, bounds=None) -> Result:
         return Result("anytime", "interrupted", found.schedule, lower_bound=bounds.lower + 1)
 
     monkeypatch.setitem(METHODS, "anytime", stopped)
@@ -266,11 +265,10 @@ def test_an_interrupt_let_through_keeps_what_the_method_told(monkeypatch):
     class Found:  # as anytime tells a schedule: its action ids
         ids = bind(inst, found.schedule)
 
-    def stopped(instance, *, run=None, bounds=None, on_schedule: Callable | None = None,
-                on_bound: Callable | None = None) -> Result:
-        on_bound(bounds.lower + 2)
-        on_schedule(Found())
-        on_bound(bounds.lower + 1)  # a lower one changes nothing
+    def stopped(instance, options=None, run=None, *, bounds=None) -> Result:
+        run.events.bound(bounds.lower + 2)
+        run.events.schedule(Found())
+        run.events.bound(bounds.lower + 1)  # a lower one changes nothing
         raise KeyboardInterrupt
 
     monkeypatch.setitem(METHODS, "anytime", stopped)

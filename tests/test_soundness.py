@@ -15,6 +15,7 @@ import functools
 import pytest
 
 from bille.solvers import schedule_from_text, solve, validate
+from bille.solvers.bfs import Options as BfsOptions
 from bille.solvers.bfs import plan as bfs
 from bille.solvers.bounds import lower_bound
 from helpers import make
@@ -27,7 +28,7 @@ MANY_STATES = 1_500
 
 @functools.cache
 def reference(inst, states: int = MAX_STATES):
-    return bfs(inst, max_states=states)
+    return bfs(inst, BfsOptions(max_states=states))
 
 
 def check_bounds(instances, states: int = MAX_STATES) -> dict:
@@ -121,7 +122,7 @@ def test_solve_refuses_a_bound_above_the_makespan(monkeypatch):
     inst = make("TTTT", [{"at": [0, 0]}], moveset="point", robot_goals=[[3, 0]])
     good = bfs(inst)
 
-    def lying(instance, *, run=None):
+    def lying(instance, options=None, run=None):
         return Result("bfs", "optimal", good.schedule, lower_bound=good.lower_bound + 1)
 
     monkeypatch.setitem(solvers.METHODS, "bfs", lying)
@@ -138,7 +139,7 @@ def test_solve_refuses_an_optimum_without_its_proof(monkeypatch):
     schedule = schedule_from_text("robots:\n  - [east, east, east, west]\n")
     assert validate(inst, schedule).metrics.makespan == 4 and bfs(inst).lower_bound == 2
 
-    def lying(instance, *, run=None):
+    def lying(instance, options=None, run=None):
         return Result("bfs", "optimal", schedule, lower_bound=2)
 
     monkeypatch.setitem(solvers.METHODS, "bfs", lying)

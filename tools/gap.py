@@ -67,7 +67,7 @@ def parse_configs(texts: str | Iterable[str]) -> list[Config]:
     if twice:
         raise OptionError(f"method configuration {twice[0]!r} is named twice")
     for c in configs:  # a wrong option is bad input, found before anything runs
-        check_options(c.method, METHODS[c.method], c.options)
+        check_options(c.method, c.options)
     return configs
 
 

@@ -7,6 +7,7 @@ import click
 import yaml
 
 from bille.solvers import METHODS, save_schedule, solve
+from bille.solvers.options import check_options
 
 from .common import (EXIT_INTERRUPTED, EXIT_NO, EXIT_OK, LiveLine, exit_code, instance_arg, label_of, print_json,
                      record_traces, schedule_arg, summary_line, trace_of, writable)
@@ -61,6 +62,7 @@ def solve_(instance: str, method: str, epsilon, horizon, time_limit, threads, lo
                  load_transfer=load_transfer, d_tr=d_tr)
     options = {k: v for k, v in given.items() if v is not None}
     options.update(_parse_options(extra))
+    check_options(method, options)  # before the instance is read, and -O never reaches solve()'s own arguments
     inst = instance_arg(instance)
     if incumbent is not None:
         options["incumbent"] = schedule_arg(incumbent)

@@ -1,11 +1,14 @@
 """``cbs``: conflict-based search as a method of ``solve()``: options, proofs, result."""
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from bille.instances import Instance, OptionError
 from bille.instances.grid import neighbour_table
 from bille.instances.moveset import Kind
+from bille.instances.options import MethodOptions, option
 from bille.instances.result import Result
 from bille.instances.run import Run
 from bille.instances.schedule import Schedule
@@ -75,44 +78,51 @@ def closed_world(instance: Instance) -> bool:
     return not bool((empty & tiles[nbr].any(axis=1)).any())
 
 
-def plan(instance: Instance, *, objective: str = "sum-of-costs", w: float = 1.0, heuristic: str = "wdg",
-         prioritize: bool = True, bypass: bool = True, target: bool = True, rectangle: bool = True,
-         corridor: bool = True, focal: str = "conflicts", run: Run | None = None,
-         max_nodes: int = 1_000_000) -> Result:
-    """Conflict-based search on a path-planning instance (module docstring).
+@dataclass(frozen=True)
+class Options(MethodOptions):
+    """Options of conflict-based search.
 
-    Parameters
-    ----------
-    objective : ``sum-of-costs`` (each robot's arrival at its goal for good, added up; ties
-        not broken) or ``makespan`` (the latest arrival).
-    w : suboptimality (>= 1): the sum of costs found is at most ``w`` times optimal; 1 is optimal.
-    focal : with ``w > 1``, how a node is chosen among those within the bound: ``conflicts``
-        (the fewest) or ``ees`` (explicit estimation, EECBS's high level).
-    heuristic : ``wdg``, ``cg`` or ``none`` (sum of costs only).
-    prioritize, bypass, target, rectangle, corridor : the improvements of :mod:`.search`
-        (rectangle and corridor reasoning apply under classic collisions; rectangles to robots
-        that move one cell at a time, corridors to robots whose every move can be undone).
-    run : the run context (when its budget expires: status ``timeout``, with the lower bound
-        reached; ``solve()`` gives 60 s unless told otherwise; without one, no limit).
-    max_nodes : constraint-tree nodes expanded before giving up.
+    ``objective``: ``sum-of-costs`` (each robot's arrival at its goal for good, added up; ties
+    not broken) or ``makespan`` (the latest arrival). ``w``: suboptimality: the sum of costs
+    found is at most ``w`` times optimal; 1 is optimal. ``focal``: with ``w > 1``, how a node is
+    chosen among those within the bound: ``conflicts`` (the fewest) or ``ees`` (explicit
+    estimation, EECBS's high level). ``heuristic``: ``wdg``, ``cg`` or ``none`` (sum of costs
+    only). ``prioritize``, ``bypass``, ``target``, ``rectangle``, ``corridor``: the improvements
+    of :mod:`.search` (rectangle and corridor reasoning apply under classic collisions;
+    rectangles to robots that move one cell at a time, corridors to robots whose every move can
+    be undone). ``max_nodes``: constraint-tree nodes expanded before giving up."""
+
+    METHOD = "cbs"
+    objective: str = option("sum-of-costs", choices=OBJECTIVES)
+    w: float = option(1.0, at_least=1)
+    heuristic: str = option("wdg", choices=HEURISTICS)
+    prioritize: bool = option(True)
+    bypass: bool = option(True)
+    target: bool = option(True)
+    rectangle: bool = option(True)
+    corridor: bool = option(True)
+    focal: str = option("conflicts", choices=FOCALS)
+    max_nodes: int = option(1_000_000, at_least=1)
+
+    def check(self) -> None:
+        if self.focal != "conflicts" and self.w == 1:
+            raise OptionError(f"cbs: focal={self.focal} chooses among nodes within w of the bound; give w > 1 with it")
+        if self.w > 1 and self.objective != "sum-of-costs":
+            raise OptionError("cbs: w > 1 bounds the sum of costs; use it with objective=sum-of-costs")
+
+
+def plan(instance: Instance, options: Options | None = None, run: Run | None = None) -> Result:
+    """Conflict-based search on a path-planning instance (module docstring, :class:`Options`).
+    When the run's budget expires: status ``timeout``, with the lower bound reached (no run: no
+    limit).
 
     On a map whose free cells are all tiles (no robot carrying) walking schedules are all the
     schedules there are (:func:`closed_world`), so the optimum is over every schedule and a robot
     that cannot walk to its goal proves the instance infeasible; elsewhere the proofs are over
     walking-only schedules, as joint A*'s.
     """
-    if objective not in OBJECTIVES:
-        raise OptionError(f"cbs: unknown objective '{objective}' (expected one of: {', '.join(OBJECTIVES)})")
-    if heuristic not in HEURISTICS:
-        raise OptionError(f"cbs: unknown heuristic '{heuristic}' (expected one of: {', '.join(HEURISTICS)})")
-    if focal not in FOCALS:
-        raise OptionError(f"cbs: unknown focal '{focal}' (expected one of: {', '.join(FOCALS)})")
-    if not w >= 1:
-        raise OptionError(f"cbs: option w expects a number of at least 1, got {w}")
-    if focal != "conflicts" and w == 1:
-        raise OptionError(f"cbs: focal={focal} chooses among nodes within w of the bound; give w > 1 with it")
-    if w > 1 and objective != "sum-of-costs":
-        raise OptionError("cbs: w > 1 bounds the sum of costs; use it with objective=sum-of-costs")
+    o = options or Options()
+    objective, w, heuristic, focal, max_nodes = o.objective, o.w, o.heuristic, o.focal, o.max_nodes
     require_path_planning(instance, "cbs")
     _check_movesets(instance)
     check_tables(instance, "cbs")
@@ -124,8 +134,8 @@ def plan(instance: Instance, *, objective: str = "sum-of-costs", w: float = 1.0,
     stats: dict = {"objective": objective.replace("-", " ") + restriction, "w": w, "heuristic": heuristic,
                    "expanded": 0, "generated": 0, "low_expanded": 0}
 
-    settings = Settings(objective, heuristic, prioritize, bypass, target, rectangle, corridor and _reversible(instance),
-                        w, focal, max_nodes)
+    settings = Settings(objective, heuristic, o.prioritize, o.bypass, o.target, o.rectangle,
+                        o.corridor and _reversible(instance), w, focal, max_nodes)
     tree = Tree(agents, instance.collisions == "classic", settings, budget.expired, stats,
                 instance.width if _grid_steps(instance) else None)
     try:

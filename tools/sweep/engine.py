@@ -193,7 +193,7 @@ def solve_in_child(outbox, text: str, method: str, options: dict, time_limit: fl
     from bille.instances.limits import mapped
     from bille.solvers import METHODS
 
-    METHODS[method]  # its module and libraries loaded before the limit (the fork server has them already)
+    METHODS[method].plan()  # its module and libraries loaded before the limit (the fork server has them already)
     if memory_limit:  # on top of what the child has mapped already (bille and its libraries)
         size = mapped() + memory_limit * 1024 * 1024
         resource.setrlimit(resource.RLIMIT_AS, (size, size))

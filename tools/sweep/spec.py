@@ -262,7 +262,7 @@ def _configs(name, grid, path: str, room: int):
     for values in itertools.product(*lists):
         options = dict(zip(keys, values))
         try:
-            check_options(name, METHODS[name], options, internal=("incumbent",))
+            check_options(name, options)
         except OptionError as exc:
             raise BilleError(f"{path}: methods.{name}: {exc}") from None
         yield name, tuple(sorted(options.items()))

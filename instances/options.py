@@ -1,0 +1,158 @@
+"""A method's options: one frozen record per method that checks itself.
+
+Each method declares its options as a frozen dataclass derived from :class:`MethodOptions`, one
+field per option with its type, default and range (:func:`option`), next to the method. Building
+one checks every field (the type by its annotation, then the range) and raises one
+:class:`~.errors.OptionError` naming the method, the option and what was expected; a method
+adds what is particular to it in :meth:`MethodOptions.check`. :meth:`MethodOptions.parse` builds
+one from a dict of names and values (a command line's ``-O NAME=VALUE``), :meth:`MethodOptions.rows`
+lists them for ``bille methods``.
+
+>>> from dataclasses import dataclass
+>>> @dataclass(frozen=True)
+... class Walk(MethodOptions):
+...     METHOD = "walk"
+...     epsilon: float = option(1.0, at_least=1)
+>>> Walk.parse({"epsilon": 2}).epsilon
+2
+>>> try:
+...     Walk.parse({"epsilon": 0.5})
+... except OptionError as error:
+...     print(error)
+walk: option epsilon expects a number of at least 1, got 0.5
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+import types
+import typing
+from typing import Any, ClassVar
+
+from .errors import OptionError
+
+
+def option(default: Any, *, at_least: float | None = None, above: float | None = None,
+           choices: tuple | None = None, help: str = "") -> Any:
+    """A field of a :class:`MethodOptions`: its default, and its range (``at_least``, strictly
+    ``above``, or one of ``choices``)."""
+    return dataclasses.field(default=default, metadata={"at_least": at_least, "above": above, "choices": choices,
+                                                        "help": help})
+
+
+@dataclasses.dataclass(frozen=True)
+class MethodOptions:
+    """The base of every method's options (module docstring). ``METHOD``: the method's name, for
+    the messages."""
+
+    METHOD: ClassVar[str] = "method"
+
+    def __post_init__(self) -> None:
+        hints = typing.get_type_hints(type(self))
+        for f in dataclasses.fields(self):
+            check_value(self.METHOD, f.name, getattr(self, f.name), hints[f.name], f.metadata)
+        self.check()
+
+    def check(self) -> None:
+        """What is particular to the method (a combination of options); raise OptionError."""
+
+    @classmethod
+    def parse(cls, given: dict[str, Any], also: tuple[str, ...] = ("time_limit",)):
+        """The options from ``given`` (names and values), checked; the others take their defaults.
+        ``also``: names taken elsewhere, listed in the message for an unknown name."""
+        names = [f.name for f in dataclasses.fields(cls)]
+        for name in given:
+            if name not in names:
+                expected = ", ".join([*also, *names])
+                raise OptionError(f"{cls.METHOD}: unknown option '{name}' (expected one of: {expected})")
+        return cls(**given)
+
+    @classmethod
+    def rows(cls) -> list[tuple[str, str, str]]:
+        """``(name, type, default and range)`` of each option, for ``bille methods``."""
+        hints = typing.get_type_hints(cls)
+        own = cls.__dict__.get("__annotations__", {})
+        out = []
+        for f in sorted(dataclasses.fields(cls), key=lambda f: f.name not in own):  # the method's own first
+            kind = _describe_type(hints[f.name])
+            default = "none" if f.default is None else str(f.default).lower() if isinstance(f.default, bool) \
+                else str(f.default)
+            out.append((f.name, kind, default + _describe_range(f.metadata)))
+        return out
+
+
+
+def check_value(method: str, name: str, value: Any, hint, meta) -> None:
+    """Raise OptionError unless ``value`` fits the type ``hint`` and the range in ``meta`` (the
+    keys of :func:`option`)."""
+    args = typing.get_args(hint)
+    optional = type(None) in args
+    base = next((a for a in args if a is not type(None)), hint) if _is_union(hint) else hint
+
+    def fail(expected: str):
+        raise OptionError(f"{method}: option {name} expects {expected}, got {_show(value)}")
+
+    if value is None:
+        if not optional:
+            fail(_describe(base))
+        return
+    if base is bool:
+        if not isinstance(value, bool):
+            fail("true or false")
+    elif base is int:
+        if isinstance(value, bool) or not isinstance(value, int):
+            fail("a whole number")
+    elif base is float:
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            fail("a finite number")
+    elif base is str:
+        if not isinstance(value, str):
+            fail("a name")
+    elif typing.get_origin(base) is list:
+        if not isinstance(value, list) or not all(isinstance(v, int) and not isinstance(v, bool) for v in value):
+            fail("a list of whole numbers")
+    elif isinstance(base, type) and not isinstance(value, base):
+        fail(f"a {base.__name__}")
+    choices = meta.get("choices")
+    if choices is not None and value not in choices:
+        raise OptionError(f"{method}: unknown {name} {value!r} (expected one of: {', '.join(map(str, choices))})")
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        if meta.get("above") is not None and not value > meta["above"]:
+            fail(f"a number above {meta['above']}")
+        if meta.get("at_least") is not None and value < meta["at_least"]:
+            fail(f"a number of at least {meta['at_least']}")
+
+
+def _is_union(hint) -> bool:
+    return typing.get_origin(hint) in (typing.Union, types.UnionType)
+
+
+def _describe(base) -> str:
+    return {bool: "true or false", int: "a whole number", float: "a finite number", str: "a name"}.get(base, "a value")
+
+
+def _describe_type(hint) -> str:
+    if _is_union(hint):
+        parts = [a for a in typing.get_args(hint) if a is not type(None)]
+        return " or ".join(_describe_type(a) for a in parts) + " or none"
+    if typing.get_origin(hint) is list:
+        return "list of int"
+    return getattr(hint, "__name__", str(hint))
+
+
+def _describe_range(meta) -> str:
+    if meta.get("choices") is not None:
+        return f" ({' | '.join(map(str, meta['choices']))})"
+    if meta.get("above") is not None:
+        return f" (> {meta['above']})"
+    if meta.get("at_least") is not None:
+        return f" (>= {meta['at_least']})"
+    return ""
+
+
+def _show(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+__all__ = ["MethodOptions", "check_value", "option"]
