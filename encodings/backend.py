@@ -31,7 +31,7 @@ def open_backend(solver: str, model: Model, instance: Instance, *, connectivity:
     """A back end for ``model`` (of ``instance``): ``solver`` is ``cpsat`` (with ``threads``
     workers, ``seed``, ``presolve``) or a python-sat solver of :data:`SAT_SOLVERS`.
     ``connectivity`` is the model's encoding (which cuts a broken solution gets). Loading the
-    model into CP-SAT raises :class:`~.model.OutOfTime` once ``budget`` expires."""
+    model into the solver raises :class:`~.model.OutOfTime` once ``budget`` expires."""
     cuts = _cut_finder(model, instance, connectivity)
     if solver == "cpsat":
         from .cpsat import CpSatBackend
@@ -41,7 +41,7 @@ def open_backend(solver: str, model: Model, instance: Instance, *, connectivity:
         raise ValueError(f"unknown solver {solver!r} (expected one of: {', '.join(SOLVERS)})")
     from .cnf import SatBackend
 
-    return SatBackend(model, cuts, solver)
+    return SatBackend(model, cuts, solver, budget)
 
 
 def _cut_finder(model: Model, instance: Instance, connectivity: str) -> Callable:

@@ -15,31 +15,39 @@ from pysat.solvers import Solver
 
 from bille.instances.interrupts import held_back
 from bille.instances.limits import address_room
+from bille.instances.run import Budget
 
 from . import SAT, UNKNOWN, UNSAT
 from .interface import SAT_SOLVERS as SOLVERS
 from .interface import THREAD_ROOM, Backend, Objective, Outcome, interruptible
-from .model import Model
+from .model import Model, OutOfTime
 
 BUDGET = 2_000  # conflicts per call between clock checks
+CHUNK = 20_000  # clauses loaded between two looks at the budget
 
 
 class SatBackend(Backend):
     """Solve a :class:`~.model.Model` with a SAT solver of python-sat (:data:`SOLVERS`; default
     CaDiCaL 1.9.5), a :class:`~.interface.Backend`."""
 
-    def __init__(self, model: Model, cuts=None, solver: str = "cadical195") -> None:
+    def __init__(self, model: Model, cuts=None, solver: str = "cadical195", budget: Budget | None = None) -> None:
         super().__init__(model, cuts)
         self.top = model.num_vars
         self.interruptible = not solver.startswith("cadical")
+        self.num_clauses = 0
         with held_back():  # the encoders would turn a Ctrl-C into an error of their own
             self.solver = Solver(name=solver)
-            self.solver.append_formula(model.clauses)
-            self.num_clauses = len(model.clauses)
-            for group in model.exactly_one:
-                self._card(group, exactly=True)
-            for group in model.at_most_one:
-                self._card(group, exactly=False)
+            try:
+                for k in range(0, len(model.clauses), CHUNK):
+                    _stop_if_spent(budget)
+                    self.add_clauses(model.clauses[k:k + CHUNK])
+                groups = [(g, True) for g in model.exactly_one] + [(g, False) for g in model.at_most_one]
+                for group, exactly in groups:  # one group's encoding can take a tenth of a second
+                    _stop_if_spent(budget)
+                    self._card(group, exactly=exactly)
+            except OutOfTime:
+                self.solver.delete()
+                raise
         self._totalizers: dict[tuple, ITotalizer] = {}
         self._stopped = False
 
@@ -139,6 +147,11 @@ class SatBackend(Backend):
                 return Outcome(UNSAT)
             if halt or self._stopped or budget.expired():
                 return Outcome(UNKNOWN)
+
+
+def _stop_if_spent(budget: Budget | None) -> None:
+    if budget is not None and budget.expired():
+        raise OutOfTime
 
 
 __all__ = ["BUDGET", "SOLVERS", "SatBackend", "THREAD_ROOM"]

@@ -166,7 +166,8 @@ def interruptible(work: Callable[[], Outcome], interrupt: Callable[[], None], bu
         while not done.wait(min(WATCH_S, budget.left())):
             if budget.expired():
                 interrupt()
-                done.wait()
+                while not done.wait(WATCH_S):  # again until it ends: a stop may land before the solve began
+                    interrupt()
     except BaseException:
         interrupt()
         thread.join()

@@ -55,11 +55,11 @@ class Rise:
         while not part.expired() and not bracket.closed:
             if self.backend is None:
                 self.began = self.began or part.now()
-                try:
+                try:  # the run's budget, not the part's: a model may take longer than one slice to load
                     self.model = build(inst, self.k, Options(), budget=self.budget)
+                    self.backend = open_backend(self.solver, self.model, inst, budget=self.budget)
                 except OutOfTime:
                     return
-                self.backend = open_backend(self.solver, self.model, inst)
             outcome = self.backend.solve(budget=part)
             if outcome.status == UNKNOWN:
                 return
@@ -188,7 +188,7 @@ class Ahead:
         answer = UNKNOWN
         try:
             model = build(inst, h, Options(), budget=part)
-            with open_backend(self.solver, model, inst) as backend:
+            with open_backend(self.solver, model, inst, budget=part) as backend:
                 outcome = backend.solve(budget=part)
             answer = outcome.status
         except OutOfTime:

@@ -69,6 +69,7 @@ class Search:
 
     def __init__(self, job: Job, instance: Instance, budget: Budget, bounds, cap: int, progress: Callable | None):
         self.job, self.instance, self.budget, self.bounds = job, instance, budget, bounds
+        self._traveling = False
         self.cap, self.progress = cap, progress
         self.proved_below = max(1, bounds.lower)
         self.incumbent: np.ndarray | None = None
@@ -153,11 +154,12 @@ class Search:
                     model = self.job.model(self.instance, k, k, self.budget)
                     backend = self.job.open(model, self.instance, self.budget)
                 except OutOfTime:
-                    return self.result("optimal", ids, lower=k)
-                try:
-                    ids = self.travel(backend, model, k, ids)
-                finally:
-                    backend.close()
+                    backend = None
+                if backend is not None:
+                    try:
+                        ids = self.travel(backend, model, k, ids)
+                    finally:
+                        backend.close()
         return self.result("optimal", ids, lower=k)
 
     def travel(self, backend: Backend, model: Model, k: int, ids, hint=None):
@@ -182,11 +184,14 @@ class Search:
     @contextmanager
     def travel_budget(self):
         """The minimization of tiles traveled runs on a child budget: ``job.travel_time`` seconds,
-        by default half the time spent so far (at least 1 s)."""
-        full = self.budget
+        by default half the time spent so far (at least 1 s); inside one already, the same."""
+        if self._traveling:
+            yield
+            return
+        full, self._traveling = self.budget, True
         seconds = self.job.travel_time
         self.budget = full.child(max(1.0, 0.5 * full.elapsed()) if seconds is None else seconds)
         try:
             yield
         finally:
-            self.budget = full
+            self.budget, self._traveling = full, False

@@ -124,7 +124,11 @@ def shortest_part(model, sub: Instance, L: int, budget: Budget, solver: str):
     for the best part found (its first ``k`` steps; ``shortest``: proved so), else ``unsat`` or
     ``unknown``."""
     done = [model.done[k] for k in range(1, L + 1)]
-    with open_backend(solver, model, sub) as backend:
+    try:
+        backend = open_backend(solver, model, sub, budget=budget)
+    except OutOfTime:
+        return UNKNOWN
+    with backend:
         outcome = backend.solve(budget=budget, objective=Objective(done, maximize=True, chain=True, at_most=L - 1))
     if outcome.values is None:
         return outcome.status

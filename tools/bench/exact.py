@@ -24,6 +24,7 @@ import time
 from bille.encodings.model import Options, build
 from bille.instances import load_instance
 from bille.instances.bundled import bundled_path
+from bille.instances.run import Budget
 from bille.solvers import solve
 
 from ..common import solved
@@ -156,7 +157,7 @@ def freedom_table(time_limit: float, threads: int, echo) -> None:
         for _, options in FREEDOMS:
             model = build(inst, T, options)
             backend = open_backend("cpsat", model, inst)
-            answer = backend.solve(deadline=time.perf_counter() + time_limit).status
+            answer = backend.solve(budget=Budget(time_limit)).status
             cells.append(f"{model.num_vars:>9} {answer:>8} {backend.stats['solve_s']:>9.1f}")
         echo(f"   {name:<12} {T:>3} {' '.join(f'{c:>30}' for c in cells)}")
 
