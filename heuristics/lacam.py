@@ -36,7 +36,7 @@ from bille.instances.options import option
 from bille.instances.run import Budget, Run, unlimited
 
 from .joint import NO_WALK, JointProblem, to_result
-from .loop_options import LoopOptions
+from .loop.loop_options import LoopOptions
 from .pibt import Bille, Classic, next_priorities
 from .refine import Paths, refine_once
 from .scatter import scatter

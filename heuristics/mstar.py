@@ -31,7 +31,7 @@ from bille.instances.options import option
 from bille.instances.run import Budget, Run, unlimited
 
 from .joint import NO_WALK, OBJECTIVE, JointProblem, OutOfTime, to_result, unwind
-from .loop_options import LoopOptions
+from .loop.loop_options import LoopOptions
 
 INF = (1 << 60, 0)
 

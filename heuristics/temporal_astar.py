@@ -29,7 +29,7 @@ from bille.instances.run import Run
 from bille.instances.rules import State, apply
 
 from .joint import JointProblem, to_result
-from .loop_options import LoopOptions
+from .loop.loop_options import LoopOptions
 from .spacetime import reservation_step
 
 

@@ -12,7 +12,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bille.heuristics import lacam, lacam_states, reconfigure, temporal_astar
+from bille.heuristics import lacam, lacam_states, temporal_astar
+
+from bille.heuristics.loop import reconfigure
 from bille.instances import Instance, OptionError
 from bille.instances.metrics import makespan as ids_makespan
 from bille.instances.run import Budget, Run, unlimited

@@ -10,7 +10,7 @@ and the parametrized tests read the records.
 
 The paper's planners walk on a fixed structure; on an instance that moves tiles,
 ``temporal-astar``, ``mstar`` and ``lacam`` run the reconfiguration loop
-(:mod:`bille.heuristics.reconfigure`) with the planner as its motion layer. Which function serves
+(:mod:`bille.heuristics.loop.reconfigure`) with the planner as its motion layer. Which function serves
 an instance is decided here, not by the planners.
 """
 from __future__ import annotations
@@ -29,7 +29,8 @@ from bille.instances.run import Run
 def plan_temporal_astar(instance: Instance, options=None, run: Run | None = None) -> Result:
     """Temporal A* (:func:`bille.heuristics.temporal_astar.plan`); on an instance that moves tiles,
     the reconfiguration loop with Temporal A* as its motion layer."""
-    from bille.heuristics import reconfigure, temporal_astar
+    from bille.heuristics import temporal_astar
+    from bille.heuristics.loop import reconfigure
 
     o = options or temporal_astar.Options()
     if instance.is_reconfiguration:
@@ -45,7 +46,8 @@ def plan_temporal_astar(instance: Instance, options=None, run: Run | None = None
 def plan_mstar(instance: Instance, options=None, run: Run | None = None) -> Result:
     """M* (:func:`bille.heuristics.mstar.plan`); on an instance that moves tiles, the
     reconfiguration loop with M* as its motion layer."""
-    from bille.heuristics import mstar, reconfigure
+    from bille.heuristics import mstar
+    from bille.heuristics.loop import reconfigure
 
     o = options or mstar.Options()
     if instance.is_reconfiguration:
@@ -71,7 +73,8 @@ def plan_lacam(instance: Instance, options=None, run: Run | None = None) -> Resu
     finds a schedule whenever one exists (time and memory permitting) and proves ``infeasible``
     when its space is exhausted. ``objective`` is for path planning; ``improve``, ``max_nodes``
     and ``seed`` for the searches over configurations."""
-    from bille.heuristics import lacam, lacam_states, reconfigure
+    from bille.heuristics import lacam, lacam_states
+    from bille.heuristics.loop import reconfigure
 
     o = options or lacam.Options()
     if not instance.is_reconfiguration:

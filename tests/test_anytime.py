@@ -11,7 +11,8 @@ from bille.instances.bundled import bundled_path
 from bille.instances.moveset import Kind
 from bille.instances.run import Budget
 from bille.instances.schedule import Schedule, bind, save_schedule
-from bille.solvers import anytime, solve, validate
+from bille.solvers import solve, validate
+from bille.solvers.anytime import method as anytime
 from bille.solvers.bfs import Options as BfsOptions
 from bille.solvers.bfs import plan as bfs
 from helpers import make, sched

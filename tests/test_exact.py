@@ -347,7 +347,7 @@ def test_an_incumbent_above_the_horizon_cap_is_still_returned(method, optimum):
 def test_the_default_cap_gives_way_to_a_longer_incumbent(method, optimum, monkeypatch):
     # the default cap bounds a search with no schedule to go by; with one, the search goes on up
     # to it (a cap given stays, as the test above shows)
-    from bille.solvers import exact
+    from bille.solvers.exact import method as exact
 
     inst = TINY["s5-move-tile"]()  # optimum 9, static bound 6
     lower = lower_bound(inst).lower

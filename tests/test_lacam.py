@@ -198,7 +198,7 @@ def test_whole_state_search_improves_to_the_brute_force_optimum(inst):
 def test_a_loop_out_of_its_share_of_the_time_hands_over_to_the_complete_search(monkeypatch):
     """The loop gets part of the time limit; when it runs out of it (its motion layer finds no
     joint plan), the whole-state search still gets the rest and finds the schedule."""
-    from bille.heuristics import reconfigure
+    from bille.heuristics.loop import reconfigure
     from bille.instances.result import Result
     from bille.solvers import registry
 

@@ -4,13 +4,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from bille.heuristics.allocation import Allocation
-from bille.heuristics.goals import Goals
-from bille.heuristics.manipulation import Manipulation
-from bille.heuristics.motion import MOTIONS, TemporalAStar
-from bille.heuristics.reconfigure import Leg, Loop, LoopState, plan
-from bille.heuristics.transfer import LoadTransfer
-from bille.heuristics.sequence import NoSequence, SequenceError, check, derive, sequence_of
+from bille.heuristics.loop.allocation import Allocation
+from bille.heuristics.loop.goals import Goals
+from bille.heuristics.loop.manipulation import Manipulation
+from bille.heuristics.loop.motion import MOTIONS, TemporalAStar
+from bille.heuristics.loop.reconfigure import Leg, Loop, LoopState, plan
+from bille.heuristics.loop.transfer import LoadTransfer
+from bille.heuristics.loop.sequence import NoSequence, SequenceError, check, derive, sequence_of
 from bille.instances import OptionError, instance_from_text, load_instance
 from bille.instances.bundled import bundled_path
 from bille.instances.generators.random import random_reconfiguration
@@ -382,7 +382,7 @@ def test_a_sequence_the_loop_cannot_derive_is_unsolved_not_bad_input(capsys, tmp
 
 def test_the_sequence_search_reaches_random_instances_with_ten_moved_tiles():
     # bille gen random --robots 4 --moved 10 --seed 2: 2,000 tile sets found no sequence
-    from bille.heuristics.sequence import derive
+    from bille.heuristics.loop.sequence import derive
     from bille.instances.generators.random import random_reconfiguration
 
     inst = random_reconfiguration(10, 8, 30, 4, 10, seed=2)

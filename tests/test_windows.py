@@ -3,9 +3,9 @@
 from bille.instances.run import Budget
 from bille.instances.schedule import Schedule
 from bille.solvers import solve, validate
-from bille.solvers.bracket import Bracket
+from bille.solvers.anytime.bracket import Bracket
 from bille.solvers.incumbent import from_schedule
-from bille.solvers.windows import Windows
+from bille.solvers.anytime.windows import Windows
 from bille.encodings import SAT, UNSAT
 from helpers import make, sched
 from test_exact import SHORTER_BY_RELAY
@@ -66,7 +66,7 @@ class _Child:
 
 
 def test_a_horizon_decided_ahead_of_the_bound_search():
-    from bille.solvers.rise import Ahead
+    from bille.solvers.anytime.rise import Ahead
 
     # one point robot four cells from its goal: the optimum is 4, horizons 1-3 are infeasible
     inst = make(".....\nTTTTT\n.....", [{"at": [0, 1]}], moveset="point", robot_goals=[[4, 1]])
@@ -87,7 +87,7 @@ def test_a_horizon_decided_ahead_of_the_bound_search():
 
 
 def test_no_horizon_is_decided_ahead_before_two_are_refuted():
-    from bille.solvers.rise import Ahead
+    from bille.solvers.anytime.rise import Ahead
 
     inst = make(".....\nTTTTT\n.....", [{"at": [0, 1]}], moveset="point", robot_goals=[[4, 1]])
     bracket = Bracket(lower=2, best=from_schedule(inst, sched("east east west east east east"), "detour"))

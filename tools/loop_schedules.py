@@ -18,7 +18,7 @@ import time
 
 import numpy as np
 
-from bille.heuristics import reconfigure
+from bille.heuristics.loop import reconfigure
 from bille.instances import load_instance
 from bille.instances.bundled import bundled_names, bundled_path
 from bille.instances.generators.random import random_reconfiguration

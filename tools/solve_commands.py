@@ -101,7 +101,7 @@ def solve_(instance: str, method: str, epsilon, horizon, time_limit, threads, lo
 def plan_sequence(instance: str, as_json: bool) -> int:
     """Print the reconfiguration sequence of INSTANCE: its tasks (checked), or one derived so
     that running it one task at a time keeps the structure connected."""
-    from bille.heuristics.sequence import NoSequence, sequence_of
+    from bille.heuristics.loop.sequence import NoSequence, sequence_of
 
     inst = instance_arg(instance)
     try:

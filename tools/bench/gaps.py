@@ -3,7 +3,7 @@
 One ``anytime`` run per instance. A row gives the static lower bound and its strongest part, the
 bound at the end and what proved it (``static``: the bound parts alone; ``rise``: the exact search
 from below, one horizon after another; ``ahead``: a horizon decided above the rising search's,
-:class:`bille.solvers.rise.Ahead`; ``window``: the whole schedule's window), the best schedule
+:class:`bille.solvers.anytime.rise.Ahead`; ``window``: the whole schedule's window), the best schedule
 and its first schedule's method and makespan, how many windows of each neighbourhood search
 (free, kept) shortened it, the certified gap ``(makespan - LB) / LB`` and the seconds at which
 each end reached its final value.

@@ -160,7 +160,7 @@ def random_report(runs: int, horizon: int, d_tr: int, time_limit: float, exact_l
     lines of a table, one per size as soon as it is measured."""
     from dataclasses import replace
 
-    from bille.heuristics.sequence import NoSequence, sequence_of
+    from bille.heuristics.loop.sequence import NoSequence, sequence_of
     from bille.instances import Task
     from bille.instances.generators.random import random_reconfiguration
 

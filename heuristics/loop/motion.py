@@ -17,11 +17,11 @@ from typing import Callable, Protocol
 from bille.instances import Instance
 from bille.instances.run import Budget
 
+from ..spacetime import reservation_step
+from ..temporal_astar import shift_up
 from .goals import Goal
 from .joint_motion import LaCAM, MStar
 from .loopstate import LoopState
-from .spacetime import reservation_step
-from .temporal_astar import shift_up
 
 
 class Motion(Protocol):

@@ -1,4 +1,4 @@
-"""The makespan search on several horizons at once (a part of :mod:`.exact`).
+"""The makespan search on several horizons at once.
 
 One CP-SAT worker proves a horizon infeasible about as fast as two on these models, so with
 ``threads`` workers the search runs ``threads`` horizons side by side, one worker each, from the

@@ -1,4 +1,4 @@
-"""The makespan search one horizon at a time (a part of :mod:`.exact`).
+"""The makespan search one horizon at a time.
 
 From the lower bound upward, ``T = LB, LB + 1, ...`` until a model is satisfiable: that schedule
 is optimal, since every horizon below was proved infeasible (a schedule of ``T`` steps also fits
@@ -11,7 +11,7 @@ has a model of its own.
 """
 from __future__ import annotations
 
-from bille.encodings import SAT, UNKNOWN, UNSAT
+from bille.encodings import UNKNOWN, UNSAT
 from bille.encodings.model import OutOfTime
 from bille.encodings.solution import decode
 from bille.instances.result import Result

@@ -40,15 +40,15 @@ from bille.instances import Instance, OptionError
 from bille.instances.rules import State, apply
 from bille.instances.run import Budget, Run, unlimited
 
+from ..joint import to_result
+from ..temporal_astar import shift_up, timing
 from .allocation import Allocation
 from .goals import Goals
-from .joint import to_result
 from .legs import Leg, Transfer
 from .loopstate import LoopState
 from .manipulation import Manipulation
 from .motion import MOTIONS, Motion
 from .sequence import NoSequence, sequence_of
-from .temporal_astar import shift_up, timing
 from .transfer import LoadTransfer
 
 RESTORED = ("circle_shifts", "relays", "swaps")  # counts that a backtrack sets back

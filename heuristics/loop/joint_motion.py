@@ -18,8 +18,8 @@ from bille.instances import Instance
 from bille.instances.run import Budget
 from bille.instances.walking import UNREACHABLE
 
-from . import lacam, mstar, pibt
-from .joint import JointProblem
+from .. import lacam, mstar, pibt
+from ..joint import JointProblem
 from .loopstate import LoopState
 
 MSTAR_EXPANSIONS = 100_000  # per M* replan: a joint plan that needs more ends the run

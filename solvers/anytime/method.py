@@ -2,17 +2,17 @@
 bound in turn, until they meet (``optimal``) or the time runs out (``feasible``, both numbers).
 
 1. **First schedule**: the one given (``incumbent``), or the shortest the heuristics find in a
-   fifth of the time limit (:func:`.incumbent.first_schedule`): milliseconds on most instances.
-   Where they find none, the loop with fewer robots taking jobs (:func:`.incumbent.fewer_robots`),
-   the runs their share cut short, again with more time (:func:`.incumbent.retry`), and then the
+   fifth of the time limit (:func:`bille.solvers.incumbent.first_schedule`): milliseconds on most instances.
+   Where they find none, the loop with fewer robots taking jobs (:func:`bille.solvers.incumbent.fewer_robots`),
+   the runs their share cut short, again with more time (:func:`bille.solvers.incumbent.retry`), and then the
    complete planner (LaCAM* over whole states,
-   :func:`.incumbent.complete_search`) seeks one with the time left; when it exhausts the
+   :func:`bille.solvers.incumbent.complete_search`) seeks one with the time left; when it exhausts the
    reachable states, no schedule exists and the answer is ``infeasible``.
 2. Then two searches run side by side, the first in a child process on a second core
    (``parallel``; without it they take turns in slices of ``slice`` seconds). With ``parallel``
    the bound search starts before the first schedule is sought, so it has the whole time limit:
 
-   - **Raising the bound**: the exact makespan search of :mod:`.exact` from the static lower
+   - **Raising the bound**: the exact makespan search of :mod:`bille.solvers.exact` from the static lower
      bound up, one model per horizon (its pruning is tightest there). An infeasible horizon ``k``
      proves that no schedule is shorter than ``k + 1``; a satisfiable one is an optimal schedule.
      One CP-SAT worker decides each horizon (``bound_solver``; a python-sat solver instead keeps
@@ -69,9 +69,9 @@ from bille.instances.rules import goal_violation
 from bille.instances.run import Budget, Run
 from bille.instances.schedule import Schedule
 
-from .bounds import Bounds, lower_bound
+from ..bounds import Bounds, lower_bound
+from ..incumbent import EXHAUSTED, Incumbent, complete_search, fewer_robots, first_schedule, from_schedule, retry
 from .bracket import Bracket
-from .incumbent import EXHAUSTED, Incumbent, complete_search, fewer_robots, first_schedule, from_schedule, retry
 from .rise import FORK, Ahead, Background, Rise
 from .windows import Windows
 
@@ -270,10 +270,10 @@ class _Anytime:
 
 class _Seek:
     """No schedule yet: the reconfiguration loop with fewer robots taking jobs
-    (:func:`.incumbent.fewer_robots`) for a fifth of the time limit (at least 4 s); the runs of the
+    (:func:`bille.solvers.incumbent.fewer_robots`) for a fifth of the time limit (at least 4 s); the runs of the
     first schedule that their share cut short, again with twice the time in turn
-    (:func:`.incumbent.retry`: a run that ends before its time drops out), for up to three tenths
-    (at least 6 s); then the complete planner (:func:`.incumbent.complete_search`) for a tenth (at
+    (:func:`bille.solvers.incumbent.retry`: a run that ends before its time drops out), for up to three tenths
+    (at least 6 s); then the complete planner (:func:`bille.solvers.incumbent.complete_search`) for a tenth (at
     least 2 s), so that what the bound search found beside it is read soon on small instances,
     and then once more, from the start, with all the time left: its search is deterministic and
     heavy-tailed (a few restarts would each stop short of where one long run gets), so it is not

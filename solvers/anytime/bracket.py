@@ -11,7 +11,7 @@ from typing import Callable
 
 from bille.instances.run import Budget
 
-from .incumbent import Incumbent
+from ..incumbent import Incumbent
 
 
 @dataclass

@@ -1,4 +1,4 @@
-"""Raising the lower bound of :mod:`.anytime`: the exact makespan search from the bound up, one
+"""Raising the lower bound of anytime solving (:mod:`.method`): the exact makespan search from the bound up, one
 model per horizon (its pruning is tightest there), in slices between the other parts of the
 search (:class:`Rise`) or in a child process on a core of its own (:class:`Background`).
 
@@ -28,8 +28,8 @@ from bille.instances import Instance
 from bille.instances.run import Budget
 from bille.instances.schedule import Schedule
 
+from ..incumbent import from_schedule
 from .bracket import Bracket
-from .incumbent import from_schedule
 
 try:  # the bound search runs in a forked child process where the platform has fork
     FORK = multiprocessing.get_context("fork")

@@ -1,4 +1,4 @@
-"""The neighbourhood search of :mod:`.anytime`: time windows of the best schedule re-solved
+"""The neighbourhood search of anytime solving (:mod:`.method`): time windows of the best schedule re-solved
 exactly in fewer steps (that module's docstring, "Shortening the schedule").
 
 Two searches take turns. The *free* one re-solves a window under every rule: a window over the
@@ -25,8 +25,8 @@ from bille.instances.rules import run
 from bille.instances.run import Budget
 from bille.instances.schedule import Schedule
 
+from ..incumbent import Incumbent, from_schedule
 from .bracket import Bracket
-from .incumbent import Incumbent, from_schedule
 
 
 class Windows:

@@ -10,7 +10,7 @@ each solution is checked step by step and a disconnected one adds cuts for every
 solver goes on. Then, at the optimal makespan, tiles traveled are minimized (``minimize_travel``).
 
 Incumbent: a schedule given with ``incumbent``, else the best the heuristics find in a twentieth
-of the time limit (at most 1 s), else the complete planner's in a tenth (:mod:`.incumbent`),
+of the time limit (at most 1 s), else the complete planner's in a tenth (:mod:`bille.solvers.incumbent`),
 validated; its makespan caps the horizons (also above the default cap, which bounds a search
 with no schedule to go by), and it is returned (``feasible``) when time runs out.
 
@@ -38,9 +38,9 @@ from bille.instances.run import Run
 from bille.instances.rules import goal_violation
 from bille.instances.schedule import Schedule
 
-from .bounds import Bounds, lower_bound
+from ..bounds import Bounds, lower_bound
+from ..incumbent import EXHAUSTED, to_cap
 from .horizons import sequential
-from .incumbent import EXHAUSTED, to_cap
 from .lanes import parallel
 from .search import RESTRICTIONS, Job, Search
 
@@ -176,7 +176,7 @@ def makespan_search(job: Job, instance: Instance, run: Run | None, max_makespan:
 
 
 def _find_incumbent(search: Search, given: Schedule | None, cap_given: bool) -> bool:
-    """A first schedule (:func:`.incumbent.to_cap`); its makespan caps the search. True if the
+    """A first schedule (:func:`bille.solvers.incumbent.to_cap`); its makespan caps the search. True if the
     complete planner proved instead that no schedule exists. A restricted search
     (``single_carry``, ``keep_structure``) takes none: a schedule outside the restriction would cap
     its horizons, and be returned as if it were the restriction's optimum."""

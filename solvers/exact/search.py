@@ -1,4 +1,4 @@
-"""The state of one exact makespan search (a part of :mod:`.exact`): its settings (:class:`Job`),
+"""The state of one exact makespan search: its settings (:class:`Job`),
 its budget, what it has proved and found (:class:`Search`), and the steps every search ends
 with: the result, a timeout, the proof of an incumbent, the minimization of tiles traveled.
 The searches themselves are :func:`.horizons.sequential` and :func:`.lanes.parallel`.
