@@ -13,6 +13,7 @@ from bille.instances.bundled import bundled_path
 from ..common import EXIT_NO, EXIT_OK, instance_arg, output_folder
 from .args import counts as _counts, names as _names, stopped as _stopped
 from .proof_commands import bench_cbs, bench_interrupt
+from .loop_schedules import bench_loop_schedules
 from .solving import bench_anytime, bench_gaps
 
 
@@ -23,6 +24,7 @@ def bench() -> None:
 
 bench.add_command(bench_anytime)
 bench.add_command(bench_gaps)
+bench.add_command(bench_loop_schedules)
 
 
 @bench.command("core")
