@@ -42,8 +42,8 @@ def solve(instance: Instance, method: str = "auto", progress=None, *, bound: boo
     each horizon decided), and ``progress`` is told the static bound as soon as it is known.
 
     The static lower bound (:mod:`.bounds`) is computed once, here, where it is used: before the
-    methods that search from it (those whose planning function takes ``bounds``: the exact and
-    anytime methods), which get the time left; and, with ``bound=True``, after any other method
+    methods that search from it (their records say so: auto, the exact and the anytime methods),
+    which get the time left; and, with ``bound=True``, after any other method
     (so it does not change the schedule found). Without it the result's ``lower_bound`` is the
     method's own proof, or None. ``time_limit`` (seconds; None: no limit; by default 60 for
     ``auto``, ``cbs`` and ``anytime`` and none for the others) covers the whole call, the bound
@@ -62,8 +62,7 @@ def solve(instance: Instance, method: str = "auto", progress=None, *, bound: boo
     ``interrupted`` with the best schedule and bound found; nothing unwinds through a solver. So
     does a cancel of ``budget`` from elsewhere. A second Ctrl-C (or a ``KeyboardInterrupt`` from
     a callback) unwinds: the result then keeps the last schedule and the best bound the method
-    told (``on_schedule``, ``on_bound``, for the methods that take them), and the static bound if
-    it was computed.
+    told through the run's events, and the static bound if it was computed.
 
     >>> from bille.instances import instance_from_text
     >>> inst = instance_from_text("grid: |\\n  TTT\\nmoveset: point\\nrobots: [{at: [0, 0]}]\\nrobot_goals: [[2, 0]]")
