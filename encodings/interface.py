@@ -26,7 +26,7 @@ from typing import Callable, Sequence
 
 from bille.instances.interrupts import quiet_thread
 from bille.instances.limits import address_room
-from bille.instances.run import Budget, unlimited
+from bille.instances.run import Budget
 
 from .model import Model
 
@@ -99,7 +99,7 @@ class Backend:
         """Solve under ``assumptions`` until ``budget`` expires (None: no limit), optimizing ``objective`` if given; ``hint``: an assignment of this model to
         start from (an earlier outcome's ``values``). Adds connectivity cuts until the
         assignment keeps the tiles connected (module docstring)."""
-        cuts, budget = 0, budget or unlimited()
+        cuts, budget = 0, budget or Budget()
         while True:
             outcome = self._solve(list(assumptions), budget, objective, hint)
             if outcome.values is None or self._cuts is None:

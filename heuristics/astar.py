@@ -39,7 +39,7 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
     """
     options = options or Options()
     epsilon, max_expansions = options.epsilon, options.max_expansions
-    budget = (run or Run.limited()).budget
+    budget = (run or Run()).budget
     problem = JointProblem.of(instance, "astar")
     stats = {"objective": OBJECTIVE, "epsilon": epsilon, "expanded": 0, "generated": 0}
     if problem.unreachable():

@@ -31,9 +31,9 @@ import random
 from collections import deque
 from dataclasses import dataclass, field
 
-from bille.instances import Instance, OptionError
+from bille.instances import Instance
 from bille.instances.options import option
-from bille.instances.run import Budget, Run, unlimited
+from bille.instances.run import Budget, Run
 
 from .joint import NO_WALK, JointProblem, to_result
 from .loop.loop_options import LoopOptions
@@ -90,7 +90,7 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
     """
     o = options or Options()
     problem = JointProblem.of(instance, "lacam")
-    status, steps, stats = joint_plan(problem, objective=o.objective, budget=(run or Run.limited()).budget,
+    status, steps, stats = joint_plan(problem, objective=o.objective, budget=(run or Run()).budget,
                                       improve=o.improve, max_nodes=o.max_nodes, seed=o.seed)
     return to_result(instance, "lacam", status, steps, stats=stats)
 
@@ -103,12 +103,9 @@ def joint_plan(problem: JointProblem, *, objective: str = "makespan", budget: Bu
 
     ``pinned``: robots that wait in the first step while holding the given cells (the
     reconfiguration loop's picks and places, which replace those waits); the search space is
-    then the schedules that start so."""
-    if objective not in OBJECTIVES:
-        raise OptionError(f"lacam: unknown objective '{objective}' (expected one of: {', '.join(OBJECTIVES)})")
-    if improve < 0:
-        raise OptionError(f"lacam: improve must be >= 0 seconds, got {improve}")
-    budget = budget or unlimited()
+    then the schedules that start so. ``objective`` and ``improve`` as in :class:`Options`,
+    which checks them."""
+    budget = budget or Budget()
     start = budget.now()
     rng = random.Random(seed)
     space = PoseSpace(problem, objective, rng, pinned or {})
@@ -210,7 +207,7 @@ def search(space, rng: random.Random, *, budget: Budget | None = None, improve: 
     an unreachable goal; ``stats["failure"]``) or ``exhausted`` (no goal in the whole space:
     the caller says what that proves). ``budget`` None: no limit; ``start``: the budget's time
     the run began (default: now)."""
-    return _LaCAM(space, rng, budget or unlimited(), improve, max_nodes, stats or {}, start).run()
+    return _LaCAM(space, rng, budget or Budget(), improve, max_nodes, stats or {}, start).run()
 
 
 class _LaCAM:

@@ -62,7 +62,7 @@ def plan(instance: Instance, *, run: Run | None = None, improve: float = 0.0,
     space = StateSpace(instance, rng)
     per_state = instance.width * instance.height + ROBOT_BYTES * max(1, instance.num_robots)
     cap = min(max_nodes, MEMORY // per_state)
-    status, steps, stats = search(space, rng, budget=(run or Run.limited()).budget, improve=improve, max_nodes=cap,
+    status, steps, stats = search(space, rng, budget=(run or Run()).budget, improve=improve, max_nodes=cap,
                                   stats={"objective": "makespan", "search": "whole states"})
     if status == "exhausted":
         status = "infeasible"

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 from bille.instances import Instance
 from bille.instances.options import option
-from bille.instances.run import Budget, Run, unlimited
+from bille.instances.run import Budget, Run
 
 from .joint import NO_WALK, OBJECTIVE, JointProblem, OutOfTime, to_result, unwind
 from .loop.loop_options import LoopOptions
@@ -56,7 +56,7 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
     ``timeout`` (no run: no limit).
     """
     o = options or Options()
-    budget = (run or Run.limited()).budget
+    budget = (run or Run()).budget
     return _MStar(JointProblem.of(instance, "mstar"), o.epsilon, o.od, budget, o.max_expansions).run()
 
 
@@ -64,7 +64,7 @@ def joint_plan(problem: JointProblem, *, epsilon: float = 1.0, od: bool = True, 
                max_expansions: int = 5_000_000) -> tuple[str, list | None, dict]:
     """M* on any :class:`JointProblem` within ``budget`` (None: no limit): ``(status, joint
     actions or None, stats)``."""
-    search = _MStar(problem, epsilon, od, budget or unlimited(), max_expansions)
+    search = _MStar(problem, epsilon, od, budget or Budget(), max_expansions)
     status, steps = search.search()
     return status, steps, search.stats
 

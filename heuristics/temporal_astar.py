@@ -62,7 +62,7 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
     Q = list(range(m)) if priorities is None else list(priorities)
     if sorted(Q) != list(range(m)):
         raise OptionError(f"temporal-astar: priorities must order the robot ids 0..{m - 1}, got {priorities}")
-    budget = (run or Run.limited()).budget
+    budget = (run or Run()).budget
     problem = JointProblem.of(instance, "temporal-astar")
     stats = {"horizon": horizon, "epsilon": epsilon, "steps": 0, "priority_shifts": 0, "replans": 0,
              "expanded": 0, "plan_ms_mean": 0.0, "plan_ms_max": 0.0}

@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Callable
 
 
@@ -105,11 +105,6 @@ class Budget:
         return f"Budget({'no limit' if math.isinf(left) else f'{left:.3f} s left'}{', cancelled' * self.cancelled})"
 
 
-def unlimited() -> Budget:
-    """A budget without a limit (a method called outside ``solve()`` without one)."""
-    return Budget()
-
-
 @dataclass(frozen=True)
 class Events:
     """What a run tells while it runs; each receiver may be None.
@@ -136,19 +131,20 @@ class Events:
 
 @dataclass(frozen=True)
 class Run:
-    """One run's context: its budget and its events (module docstring)."""
+    """One run's context: its budget (by default one without a limit, started when the run is
+    made) and its events (module docstring)."""
 
-    budget: Budget
+    budget: Budget = field(default_factory=Budget)
     events: Events = Events()
 
     @classmethod
-    def limited(cls, seconds: float | None = None, **events) -> Run:
-        """A run of ``seconds`` (None: no limit) on the real clock, telling ``events``."""
-        return cls(Budget(seconds), Events(**events))
+    def limited(cls, seconds: float) -> Run:
+        """A run of ``seconds`` on the real clock, telling no one."""
+        return cls(Budget(seconds))
 
     def part(self, budget: Budget) -> Run:
         """The same run with a part's budget."""
         return Run(budget, self.events)
 
 
-__all__ = ["Budget", "Events", "Run", "unlimited"]
+__all__ = ["Budget", "Events", "Run"]

@@ -68,7 +68,7 @@ def plan(instance: Instance, options: AutoOptions | None = None, run: Run | None
     the static bound from ``solve()``, handed on with what the brute force proved."""
     from . import anytime, bfs
 
-    run = run or Run.limited()
+    run = run or Run()
     budget = run.budget
     if instance.collisions == "classic" and not instance.is_reconfiguration:
         return _classic(instance, run)

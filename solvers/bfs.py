@@ -44,7 +44,7 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
     """
     options = options or Options()
     max_steps, max_states = options.max_steps, options.max_states
-    budget = (run or Run.limited()).budget.child()
+    budget = (run or Run()).budget.child()
     world = instance.world
     goal_tiles, goal_cells = instance.goal_tiles, instance.goal_cells
     root = instance.start_state

@@ -17,7 +17,7 @@ from bille.heuristics import lacam, lacam_states, temporal_astar
 from bille.heuristics.loop import reconfigure
 from bille.instances import Instance, OptionError
 from bille.instances.metrics import makespan as ids_makespan
-from bille.instances.run import Budget, Run, unlimited
+from bille.instances.run import Budget, Run
 from bille.instances.schedule import Schedule, bind
 
 from .compact import compact
@@ -121,7 +121,7 @@ def fewer_robots(instance: Instance, budget: Budget | None) -> Incumbent | None:
              (motion, transfer, "given", list(active)), RUN_SHARE)
             for k in range(m - 1, 0, -1) for motion, transfer in FEWER
             for active in itertools.combinations(range(m), k))
-    return _portfolio(instance, runs, budget or unlimited(), improve=False, first=True)
+    return _portfolio(instance, runs, budget or Budget(), improve=False, first=True)
 
 
 def compacted(instance: Instance, found: Incumbent, budget: Budget | None) -> Incumbent:
@@ -148,7 +148,7 @@ def to_cap(instance: Instance, given: Schedule | None, budget: Budget,
                               f"'{instance.name}' (bille check says why)")
         return found, False
     limited = budget.seconds() is not None
-    seconds = max(0.01, min(1.0, 0.05 * budget.left()) if limited else 1.0)
+    seconds = max(0.01, min(1.0, 0.05 * budget.left()))  # 1 s without a limit
     found = first_schedule(instance, budget.child(seconds), improve=False)  # a cap: the proof follows
     found = found or fewer_robots(instance, budget.child(seconds))
     if found is not None or not limited:

@@ -86,7 +86,7 @@ def plan_lacam(instance: Instance, options=None, run: Run | None = None) -> Resu
     if o.objective != "makespan":
         raise OptionError(f"lacam: objective '{o.objective}' is for path planning; a reconfiguration is "
                           "planned for its makespan")
-    run = run or Run.limited()
+    run = run or Run()
     loop = reconfigure.plan(instance, motion="lacam", load_transfer=o.load_transfer, d_tr=o.d_tr,
                             run=run.part(run.budget.share(LOOP_SHARE)), max_steps=o.max_steps, active=o.active,
                             method="lacam")

@@ -126,7 +126,7 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
     require_path_planning(instance, "cbs")
     _check_movesets(instance)
     check_tables(instance, "cbs")
-    budget = (run or Run.limited()).budget
+    budget = (run or Run()).budget
     problem = JointProblem.of(instance, "cbs")
     agents = agents_of(problem)
     closed = closed_world(instance)

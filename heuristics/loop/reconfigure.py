@@ -38,7 +38,7 @@ from __future__ import annotations
 
 from bille.instances import Instance, OptionError
 from bille.instances.rules import State, apply
-from bille.instances.run import Budget, Run, unlimited
+from bille.instances.run import Budget, Run
 
 from ..joint import to_result
 from ..temporal_astar import shift_up, timing
@@ -72,7 +72,7 @@ def plan(instance: Instance, *, motion: str | Motion = "temporal-astar", load_tr
     context (when its budget expires, status ``timeout``; default: no limit).
     """
     name = motion if isinstance(motion, str) else motion.name
-    budget = (run or Run.limited()).budget
+    budget = (run or Run()).budget
     try:
         loop = Loop(instance, motion=motion, load_transfer=load_transfer, d_tr=d_tr, epsilon=epsilon,
                     horizon=horizon, budget=budget, max_steps=max_steps, max_shifts=max_shifts,
@@ -118,7 +118,7 @@ class Loop:
             raise OptionError(f"instance '{instance.name}' has no robots to move its tiles")
         active = _active(active, m, name)
         self.instance = instance
-        self.budget = budget or unlimited()
+        self.budget = budget or Budget()
         self.s = LoopState.start(instance, sequence_of(instance, budget=self.budget), Q)
         jobs = self.s.jobs
         w, h = instance.width, instance.height

@@ -113,7 +113,7 @@ def plan(instance: Instance, options: AnytimeOptions | None = None, run: Run | N
     line draws a live line from it). ``bounds``: the static bound, if already computed.
     """
     o = options or AnytimeOptions()
-    run = run or Run.limited()
+    run = run or Run()
     budget = run.budget.child()  # started now: the run's own clock
     bounds = bounds or lower_bound(instance)
     bracket = Bracket(bounds.lower, budget)
@@ -289,7 +289,7 @@ class _Seek:
     def step(self) -> Incumbent | None:
         """The next stage; the schedule it found, or None."""
         stage, seconds = self.stages.pop(0) if self.stages else ("complete", float("inf"))
-        budget = self.budget.child(max(0.01, min(seconds, self.budget.left())))
+        budget = self.budget.child(max(0.01, seconds))  # never past the run's end
         if stage == "retry":
             return retry(self.instance, self.cut, budget)
         if stage == "fewer robots":

@@ -152,7 +152,7 @@ def makespan_search(job: Job, instance: Instance, run: Run | None, max_makespan:
     answers, the incumbent, then the search over horizons (:func:`.lanes.parallel` with two or
     more threads and no ``first_horizon``, else :func:`.horizons.sequential`)."""
     method = job.method
-    run = run or Run.limited()
+    run = run or Run()
     budget = run.budget.child()  # started now: the search's own time
     bounds = bounds or lower_bound(instance)
     cap = default_cap(bounds.lower) if max_makespan is None else max_makespan

@@ -69,7 +69,6 @@ class Search:
 
     def __init__(self, job: Job, instance: Instance, budget: Budget, bounds, cap: int, progress: Callable | None):
         self.job, self.instance, self.budget, self.bounds = job, instance, budget, bounds
-        self._traveling = False
         self.cap, self.progress = cap, progress
         self.proved_below = max(1, bounds.lower)
         self.incumbent: np.ndarray | None = None
@@ -138,7 +137,9 @@ class Search:
         """Horizon ``T`` is satisfiable and every one below it infeasible: the outcome's schedule
         is optimal; tiles traveled are then minimized."""
         self.stats["makespan_s"] = round(self.budget.elapsed(), 3)
-        ids = self.travel(backend, model, T, decode(model, self.instance, outcome.value)[:, :T], outcome.values)
+        ids = decode(model, self.instance, outcome.value)[:, :T]
+        with self.travel_budget():
+            ids = self.travel(backend, model, T, ids, outcome.values)
         self.stats["solver"] = backend.stats
         return self.result("optimal", ids, lower=T)
 
@@ -165,17 +166,17 @@ class Search:
     def travel(self, backend: Backend, model: Model, k: int, ids, hint=None):
         """``ids``, a schedule of the proved optimal makespan ``k``, or one of as many steps with
         fewer tiles traveled: the motions up to step ``k`` minimized (``done[k]`` assumed where the
-        model has it) from ``hint`` (the schedule's assignment, if known), within the minimization's
-        time. ``stats.tiles_traveled_optimal`` says whether the minimum was proved."""
+        model has it) from ``hint`` (the schedule's assignment, if known), within the search's
+        budget (the callers narrow it, :meth:`travel_budget`). ``stats.tiles_traveled_optimal``
+        says whether the minimum was proved."""
         self.stats["tiles_traveled_optimal"] = False
         if not self.job.minimize_travel:
             return ids
         steps = {v: t for (_, t), group in model.y.items() for v, _, _ in group}
         motion = [v for v in model.motion if steps[v] <= k]  # done[k] excludes the later ones
         backend.tune(presolve=True)  # CP-SAT: an objective profits from presolve
-        with self.travel_budget():
-            outcome = self.solve(backend, [model.done[k]] if k in model.done else [], objective=Objective(motion),
-                                 hint=hint)
+        outcome = self.solve(backend, [model.done[k]] if k in model.done else [], objective=Objective(motion),
+                             hint=hint)
         if outcome.values is None:
             return ids  # no better schedule in time: keep this one
         self.stats["tiles_traveled_optimal"] = outcome.status == SAT
@@ -184,14 +185,11 @@ class Search:
     @contextmanager
     def travel_budget(self):
         """The minimization of tiles traveled runs on a child budget: ``job.travel_time`` seconds,
-        by default half the time spent so far (at least 1 s); inside one already, the same."""
-        if self._traveling:
-            yield
-            return
-        full, self._traveling = self.budget, True
+        by default half the time spent so far (at least 1 s)."""
+        full = self.budget
         seconds = self.job.travel_time
         self.budget = full.child(max(1.0, 0.5 * full.elapsed()) if seconds is None else seconds)
         try:
             yield
         finally:
-            self.budget, self._traveling = full, False
+            self.budget = full
