@@ -16,11 +16,11 @@ from bille.instances import BilleError, load_instance
 from bille.instances.bundled import bundled_path
 from bille.instances import instance_from_text
 from bille.solvers import METHODS, load_schedule, schedule_from_text, solve, validate
-from bille.tools.sweep.commands import Interrupted, run_spec
+from bille.tools.sweep.commands import run_spec
 from bille.tools.sweep.engine import execute, run_dask
 from bille.tools.sweep.report import summary
 from bille.tools.sweep.results import COLUMNS, TIMING, load_table
-from bille.tools.sweep.spec import load_spec
+from bille.tools.sweep.spec import Limits, load_spec
 
 SPEC = """
 name: small
@@ -63,7 +63,7 @@ def table(rows):
 def test_a_method_that_forks_runs_inside_a_sweep_run(tmp_path):
     # anytime forks its bound search: a run's process may start processes of its own
     run = next(r for r in load_spec(write_spec(tmp_path, EVERY)).runs if r.method == "anytime")
-    row = execute(run, 30, None)
+    row = execute(run, Limits(30))
     assert row["status"] == "optimal", row
     schedule = schedule_from_text(row["schedule"])
     report = validate(instance_from_text(run.text), schedule)
@@ -118,7 +118,7 @@ def stopped_on_dask(client, tmp_path):
         raise KeyboardInterrupt
 
     with pytest.raises(KeyboardInterrupt):
-        run_dask(runs, 300, None, client, on_row)
+        run_dask(runs, Limits(300), client, on_row)
     assert [r["instance"] for r in got] == ["crowded-2"]
     end = time.time() + 60
     while time.time() < end and (any(client.processing().values()) or any(client.run(live_children).values())):
@@ -353,7 +353,7 @@ def test_failures_are_rows_with_their_reason(tmp_path):
     assert sum(int(line.split()[0]) for line in reasons) == 2, said
     assert any(re.match(r"  [12] x crashed \(signal 6\): .*(bad_alloc|OutOfMemoryException).* \(first: "
                         r"sat:solver=(cadical195|glucose42) on lt-4\)$", line) for line in reasons), said
-    crashed = execute(spec.runs[0], 10, None, target=crash)
+    crashed = execute(spec.runs[0], Limits(10), target=crash)
     assert crashed["status"] == "failed" and crashed["error"] == "crashed (exit code 3)"
 
 

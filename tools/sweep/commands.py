@@ -103,12 +103,12 @@ def run_spec(spec, out, *, jobs=None, scheduler=None, client=None, quiet=False):
                 own = client is None
                 client = client or Client(scheduler, timeout="10s")
                 try:
-                    run_dask(todo, spec.time_limit, spec.memory_limit, client, on_row)
+                    run_dask(todo, spec.limits, client, on_row)
                 finally:
                     if own:
                         client.close()
             else:
-                run_local(todo, spec.time_limit, spec.memory_limit, jobs or os.cpu_count() or 1, on_row)
+                run_local(todo, spec.limits, jobs or os.cpu_count() or 1, on_row)
         except KeyboardInterrupt:
             store.finish()
             raise Interrupted(certify(store.rows)) from None

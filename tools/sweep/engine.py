@@ -32,7 +32,9 @@ import uuid
 from concurrent.futures import ThreadPoolExecutor, as_completed
 from importlib.metadata import version
 
-from .spec import Run
+from bille.instances.run import Budget
+
+from .spec import Limits, Run
 
 GRACE_S = 30.0  # a run that does not answer this long after its time limit is killed
 POLL_S = 0.2  # how often a waiting run looks whether the sweep was stopped
@@ -70,9 +72,10 @@ def describe(run: Run) -> dict:
                 method=run.method, options=run.options_json, label=run.label)
 
 
-def execute(run: Run, time_limit: float, memory_limit: int | None, target=None, stop=None) -> dict | None:
-    """Run ``run`` in a child process and return its row (see the module docstring); None if
-    ``stop()`` turned true first (the run was killed: it did not finish, so it has no row)."""
+def execute(run: Run, limits: Limits, target=None, stop=None) -> dict | None:
+    """Run ``run`` in a child process under ``limits`` and return its row (see the module
+    docstring); None if ``stop()`` turned true first (the run was killed: it did not finish, so
+    it has no row)."""
     row = dict(describe(run), status=None, makespan=None, tiles_traveled=None, lower_bound=None, time_s=None,
                expansions=None, stats=None, error=None, schedule=None, **versions())
     ctx = _context()
@@ -80,14 +83,13 @@ def execute(run: Run, time_limit: float, memory_limit: int | None, target=None, 
     errors = tempfile.NamedTemporaryFile("w+", suffix=".stderr", delete=False)
     errors.close()
     child = ctx.Process(target=_child, args=(target or solve_in_child, errors.name, outbox, run.text, run.method,
-                                             dict(run.options), time_limit, memory_limit), daemon=False)
-    began = time.perf_counter()
+                                             dict(run.options), limits), daemon=False)
+    budget = Budget(dict(run.options).get("time_limit", limits.seconds) + GRACE_S)
     _start(child)
     outbox.close()
-    limit = dict(run.options).get("time_limit", time_limit) + GRACE_S
     answer, stopped = None, False
     try:
-        while (left := began + limit - time.perf_counter()) > 0:
+        while (left := budget.left()) > 0:
             if inbox.poll(min(POLL_S, left)):
                 answer = inbox.recv()
                 break
@@ -110,12 +112,12 @@ def execute(run: Run, time_limit: float, memory_limit: int | None, target=None, 
         return None
     if answer is None:
         code = child.exitcode
-        if time.perf_counter() - began >= limit:
+        if budget.expired():
             row.update(status="failed", error=f"killed: no answer {GRACE_S:g} s after the time limit")
         else:
             how = f"signal {-code}" if code is not None and code < 0 else f"exit code {code}"
             row.update(status="failed", error=f"crashed ({how})" + (f": {said}" if said else ""))
-        row["time_s"] = round(time.perf_counter() - began, 3)
+        row["time_s"] = round(budget.elapsed(), 3)
     else:
         row.update(answer)
     return row
@@ -186,7 +188,7 @@ def _start(child) -> None:
             main.__file__ = path
 
 
-def solve_in_child(outbox, text: str, method: str, options: dict, time_limit: float, memory_limit) -> None:
+def solve_in_child(outbox, text: str, method: str, options: dict, limits: Limits) -> None:
     """The child's side: limits, the solve, one row sent back."""
     import resource
 
@@ -194,6 +196,7 @@ def solve_in_child(outbox, text: str, method: str, options: dict, time_limit: fl
     from bille.solvers import METHODS
 
     METHODS[method].plan()  # its module and libraries loaded before the limit (the fork server has them already)
+    memory_limit = limits.memory_mb
     if memory_limit:  # on top of what the child has mapped already (bille and its libraries)
         size = mapped() + memory_limit * 1024 * 1024
         resource.setrlimit(resource.RLIMIT_AS, (size, size))
@@ -202,7 +205,7 @@ def solve_in_child(outbox, text: str, method: str, options: dict, time_limit: fl
         from bille.solvers import dump_schedule, solve
 
         inst = instance_from_text(text)
-        options = {"time_limit": time_limit, **options}
+        options = {"time_limit": limits.seconds, **options}
         try:
             result = solve(inst, method, bound=True, **options)
         except OptionError as exc:  # the method does not apply to this instance: a row, not a failure
@@ -225,12 +228,12 @@ def solve_in_child(outbox, text: str, method: str, options: dict, time_limit: fl
         outbox.close()
 
 
-def run_local(runs: list[Run], time_limit: float, memory_limit, jobs: int, on_row) -> None:
+def run_local(runs: list[Run], limits: Limits, jobs: int, on_row) -> None:
     """The runs on ``jobs`` worker threads, each run in its own child process. Interrupted
     (Ctrl-C), the runs under way are killed; every run finished before is handed to ``on_row``."""
     stop = threading.Event()
     pool = ThreadPoolExecutor(max_workers=jobs)
-    futures = [pool.submit(execute, r, time_limit, memory_limit, stop=stop.is_set) for r in runs]
+    futures = [pool.submit(execute, r, limits, stop=stop.is_set) for r in runs]
     handed = set()
     try:
         for fut in as_completed(futures):
@@ -264,7 +267,7 @@ class _DaskStop:
         return self.stopped
 
 
-def run_dask(runs: list[Run], time_limit: float, memory_limit, client, on_row) -> None:
+def run_dask(runs: list[Run], limits: Limits, client, on_row) -> None:
     """The runs as tasks of a Dask cluster (``client``), each in a child process on its worker.
     Interrupted, the sweep's stop event tells the runs under way to end, and the rest are
     cancelled."""
@@ -272,7 +275,7 @@ def run_dask(runs: list[Run], time_limit: float, memory_limit, client, on_row) -
     from distributed import as_completed as dask_completed
 
     event = Event(f"bille-sweep-stop-{uuid.uuid4().hex}", client=client)
-    futures = client.map(execute, runs, time_limit=time_limit, memory_limit=memory_limit, stop=_DaskStop(event.name),
+    futures = client.map(execute, runs, limits=limits, stop=_DaskStop(event.name),
                          pure=False)
     run_of = {fut.key: run for fut, run in zip(futures, runs)}
     try:

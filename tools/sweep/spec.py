@@ -79,11 +79,25 @@ class Run:
 
 
 @dataclass(frozen=True)
+class Limits:
+    """What each run of a sweep may take: ``seconds`` (a run's own ``time_limit`` option wins)
+    and ``memory_mb`` megabytes on top of what its process has mapped when it starts (None: no
+    limit)."""
+
+    seconds: float
+    memory_mb: int | None = None
+
+
+@dataclass(frozen=True)
 class Spec:
     name: str
     runs: list
     time_limit: float
     memory_limit: int | None
+
+    @property
+    def limits(self) -> Limits:
+        return Limits(self.time_limit, self.memory_limit)
 
 
 def _show(v) -> str:
