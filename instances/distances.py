@@ -6,6 +6,11 @@ cells stay inside the grid and off obstacles (docs/rules.md, rule 2 without a lo
 robot is a step of this graph (rules 1 and 4 only remove steps), and a pick or place leaves the
 pose unchanged, so the number of steps between two poses of any schedule is at least their
 distance here. Bounds (``bille.solvers.bounds``) and the encodings' pruning read these tables.
+
+Within a class of schedules that never has a tile on some cells (``ground``: the cells that may
+ever hold one, :mod:`bille.solvers.classes`), a robot's feet stand only on ground cells (rule 4),
+so its steps are those of the relaxed graph whose poses have both feet on the ground: the
+distances of that graph bound every schedule of the class.
 """
 from __future__ import annotations
 
@@ -25,18 +30,28 @@ INF = np.iinfo(np.int32).max // 2  # the distance of what cannot be reached
 
 @dataclass(frozen=True, eq=False)
 class Relaxed:
-    """The pose graph of one robot type with tiles ignored (see the module docstring)."""
+    """The pose graph of one robot type with tiles ignored (see the module docstring); with
+    ``ground`` (a mask of cells), only its poses with both feet on the ground."""
 
     graph: PoseGraph
+    ground: np.ndarray | None = None
+
+    @cached_property
+    def poses(self) -> np.ndarray:
+        """Mask of the poses of this graph: valid, and with both feet on the ground."""
+        g = self.graph
+        if self.ground is None:
+            return g.valid
+        return g.valid & self.ground[g.feet[:, 0]] & self.ground[g.feet[:, 1]]
 
     @cached_property
     def edges(self) -> csr_matrix:
-        """Walking steps ``p -> q`` (``p != q``), unit weight."""
+        """Walking steps ``p -> q`` (``p != q``) between poses of this graph, unit weight."""
         g = self.graph
         walking = np.isin(g.kind, (int(Kind.WAIT), int(Kind.MOTION)))
-        p, a = np.nonzero((g.succ >= 0) & walking[None, :] & g.valid[:, None])
+        p, a = np.nonzero((g.succ >= 0) & walking[None, :] & self.poses[:, None])
         q = g.succ[p, a]
-        keep = p != q
+        keep = (p != q) & self.poses[q]
         n = g.num_poses
         return csr_matrix((np.ones(int(keep.sum()), np.float64), (p[keep], q[keep])), shape=(n, n))
 
@@ -67,7 +82,7 @@ class Relaxed:
     def to_front(self, cell: int) -> np.ndarray:
         """Steps from every pose to a pose with the front foot on ``cell``."""
         g = self.graph
-        return self.to_poses(np.flatnonzero(g.valid & (g.feet[:, 0] == cell)))
+        return self.to_poses(np.flatnonzero(self.poses & (g.feet[:, 0] == cell)))
 
     def from_offsets(self, offsets: np.ndarray) -> np.ndarray:
         """Earliest arrival at every pose when pose ``p`` is available from time ``offsets[p]``
@@ -90,11 +105,12 @@ class Relaxed:
 _CACHE: LRU[Relaxed] = LRU(16)
 
 
-def relaxed_for(graph: PoseGraph) -> Relaxed:
-    """The :class:`Relaxed` graph of ``graph``, one per pose graph: robots of one moveset, the
-    bounds and every horizon's model share its edges (a graph's id may be reused once it is
-    gone: the cached one must be of this graph)."""
-    return _CACHE.get(id(graph), lambda: Relaxed(graph), valid=lambda r: r.graph is graph)
+def relaxed_for(graph: PoseGraph, ground: np.ndarray | None = None) -> Relaxed:
+    """The :class:`Relaxed` graph of ``graph`` (on ``ground``), one per pose graph and ground:
+    robots of one moveset, the bounds and every horizon's model share its edges (a graph's id
+    may be reused once it is gone: the cached one must be of this graph)."""
+    key = id(graph) if ground is None else (id(graph), np.packbits(ground).tobytes())
+    return _CACHE.get(key, lambda: Relaxed(graph, ground), valid=lambda r: r.graph is graph)
 
 
 def manipulates_ahead(graph: PoseGraph) -> bool:

@@ -59,6 +59,15 @@ that no robot can ever place on (the bound above is infinite); a cell of ``R`` t
 can ever pick at; cells of ``R`` that cannot all be assigned to cells of ``F`` at a finite
 closure distance. Each contradicts a part above, which holds for every schedule.
 
+Within a class of schedules (:mod:`.classes`: e.g. those that never set a tile down where
+neither the start nor the goal has one) the same parts are theorems about the schedules of the
+class when computed on its *ground* (:class:`Ground`): the cells a foot can stand on, and the
+cells a pick and a place can target, in any schedule of the class. Every proof above uses the
+schedule only through the poses it stands in, its picks and its places, and their distances in
+the relaxed graph; in a schedule of the class, each of those lies on the ground, so the relaxed
+graph restricted to the ground (:func:`~bille.instances.distances.relaxed_for` with ``ground``)
+and the events restricted to it give bounds, and proofs of emptiness, for the class.
+
 Checked against the brute-force search (``bille solve -m bfs``) on random tiny instances by
 ``tests/test_soundness.py``: no part may exceed a proved optimum.
 """
@@ -79,6 +88,34 @@ from bille.instances.run import Budget
 from .routing import routing_bound
 
 
+@dataclass(frozen=True, eq=False)
+class Ground:
+    """Where the schedules considered can stand and work: ``feet`` the cells a foot may stand
+    on, ``picks`` and ``places`` the cells those actions may target (masks over the cells;
+    None: every cell). :data:`EVERYWHERE` is every schedule's."""
+
+    feet: np.ndarray | None = None
+    picks: np.ndarray | None = None
+    places: np.ndarray | None = None
+
+    def relaxed(self, graph: PoseGraph):
+        """The relaxed pose graph of ``graph`` on the ground."""
+        return relaxed_for(graph, self.feet)
+
+    def targets(self, graph: PoseGraph, kind: Kind, n: int) -> tuple[np.ndarray, np.ndarray]:
+        """Pairs ``(pose, cell)``: from a pose of the ground, an action of ``kind`` targets a
+        cell it may target."""
+        poses, cells = _by_target(graph, kind, n)
+        keep = self.relaxed(graph).poses[poses]
+        allowed = self.picks if kind == Kind.PICK else self.places
+        if allowed is not None:
+            keep &= allowed[cells]
+        return poses[keep], cells[keep]
+
+
+EVERYWHERE = Ground()
+
+
 @dataclass
 class Bounds:
     """Lower bound on the makespan, its parts, and reasons why no schedule exists (if any)."""
@@ -88,8 +125,9 @@ class Bounds:
     impossible: list[str]
 
 
-def lower_bound(instance: Instance, *, budget: Budget | None = None) -> Bounds:
-    """The makespan lower bound of the module docstring, and static proofs of infeasibility.
+def lower_bound(instance: Instance, *, budget: Budget | None = None, ground: Ground = EVERYWHERE) -> Bounds:
+    """The makespan lower bound of the module docstring, and static proofs of infeasibility;
+    for the schedules that keep to ``ground`` (a class's, :mod:`.classes`) if given.
 
     ``budget`` limits the linear program of the routing part, the one part that can take long:
     once it has expired (time spent, or the run cancelled), that part is left out (None)."""
@@ -97,7 +135,7 @@ def lower_bound(instance: Instance, *, budget: Budget | None = None) -> Bounds:
     state = instance.start_state
     start, goal = instance.start.tiles, instance.goal_tiles
     remove, fill = start & ~goal, goal & ~start
-    relaxed = [relaxed_for(g) for g in world.graphs]
+    relaxed = [ground.relaxed(g) for g in world.graphs]
     m = max(1, instance.num_robots)
     parts: dict = {}
     impossible: list[str] = []
@@ -121,18 +159,18 @@ def lower_bound(instance: Instance, *, budget: Budget | None = None) -> Bounds:
         actions = 2 * k + carried + (k if all(ahead.values()) else 0)
         parts["manipulations"] = -(-actions // m)
         from_start = [r.from_pose(p) for r, p in zip(relaxed, state.poses)]
-        place = _first_places(world, relaxed, from_start, state.carrying, fill)
+        place = _first_places(world, ground, from_start, state.carrying, fill)
         parts["first place on every cell to fill"] = _worst(place, fill, world, impossible,
                                                             "no robot can ever place a tile on {}")
-        pick = _last_picks(world, from_start, ahead)
+        pick = _last_picks(world, ground, from_start, ahead)
         parts["last pick from every cell to empty"] = _worst(pick, remove, world, impossible,
                                                              "no robot can ever pick the tile at {}")
-        carry = _transport(world, remove, fill)
+        carry = _transport(world, ground, remove, fill)
         if carry is None:
             impossible.append("the tiles that must go cannot all be carried to cells that must be filled")
         else:
             parts["carrying (matching)"] = -(-(carry + carried) // m)
-            parts["routing (LP)"] = routing_bound(instance, _by_target, budget)
+            parts["routing (LP)"] = routing_bound(instance, ground, budget)
     lower = max([v for v in parts.values() if v is not None] + [0])
     return Bounds(lower, parts, impossible)
 
@@ -160,35 +198,35 @@ def _by_target(graph: PoseGraph, kind: Kind, n: int) -> tuple[np.ndarray, np.nda
     return p.astype(np.int64), graph.target[p, acts[a]].astype(np.int64)
 
 
-def _first_places(world, relaxed, from_start, carrying, fill) -> np.ndarray:
+def _first_places(world, ground: Ground, from_start, carrying, fill) -> np.ndarray:
     """Per cell: the earliest step at which any robot can place a tile there (``INF`` if never),
     carrying from the start or after a pick anywhere (module docstring)."""
     n = world.width * world.height
     best = np.full(n, INF, dtype=np.int64)
     if not fill.any():
         return best
-    for i, (g, r) in enumerate(zip(world.graphs, relaxed)):
-        picks, _ = _by_target(g, Kind.PICK, n)
+    for i, g in enumerate(world.graphs):
+        picks, _ = ground.targets(g, Kind.PICK, n)
         offsets = np.full(g.num_poses, INF, dtype=np.int64)
         picked = np.unique(picks)
         offsets[picked] = np.where(from_start[i][picked] < INF, from_start[i][picked] + 1, INF)
         if carrying[i]:
             offsets = np.minimum(offsets, from_start[i])
-        loaded = r.from_offsets(offsets)  # earliest arrival at each pose with a tile
-        poses, cells = _by_target(g, Kind.PLACE, n)
+        loaded = ground.relaxed(g).from_offsets(offsets)  # earliest arrival at each pose with a tile
+        poses, cells = ground.targets(g, Kind.PLACE, n)
         arrive = loaded[poses]
         ok = arrive < INF
         np.minimum.at(best, cells[ok], arrive[ok] + 1)
     return best
 
 
-def _last_picks(world, from_start, ahead: dict) -> np.ndarray:
+def _last_picks(world, ground: Ground, from_start, ahead: dict) -> np.ndarray:
     """Per cell: the earliest step by which a tile picked there can have been set down again
     (``ahead``: per graph id, whether its robots pick and place on one cell from a pose)."""
     n = world.width * world.height
     best = np.full(n, INF, dtype=np.int64)
     for i, g in enumerate(world.graphs):
-        poses, cells = _by_target(g, Kind.PICK, n)
+        poses, cells = ground.targets(g, Kind.PICK, n)
         reach = from_start[i][poses]
         ok = reach < INF
         down = 2 + (1 if ahead[id(g)] else 0)
@@ -196,7 +234,7 @@ def _last_picks(world, from_start, ahead: dict) -> np.ndarray:
     return best
 
 
-def _transport(world, remove: np.ndarray, fill: np.ndarray) -> int | None:
+def _transport(world, ground: Ground, remove: np.ndarray, fill: np.ndarray) -> int | None:
     """Least cost in actions of carrying the tiles that must go: a minimum-cost assignment of the
     cells that must empty to distinct cells that must fill under the closure ``d*`` of the module
     docstring. None if no assignment of finite cost exists.
@@ -214,13 +252,13 @@ def _transport(world, remove: np.ndarray, fill: np.ndarray) -> int | None:
     rows, cols, weights = [], [], []
     base = n  # cells are nodes 0 .. n-1, then each robot type's poses
     for g in {id(g): g for g in world.graphs}.values():
-        e = relaxed_for(g).edges.tocoo()
+        e = ground.relaxed(g).edges.tocoo()
         rows += [e.row + base]
         cols += [e.col + base]
         weights += [e.data]
-        p, c = _by_target(g, Kind.PICK, n)
+        p, c = ground.targets(g, Kind.PICK, n)
         rows, cols, weights = rows + [c], cols + [p + base], weights + [np.ones(len(p))]
-        p, c = _by_target(g, Kind.PLACE, n)
+        p, c = ground.targets(g, Kind.PLACE, n)
         rows, cols, weights = rows + [p + base], cols + [c], weights + [np.ones(len(p))]
         base += g.num_poses
     graph = csr_matrix((np.concatenate(weights), (np.concatenate(rows), np.concatenate(cols))), shape=(base, base))

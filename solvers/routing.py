@@ -39,24 +39,25 @@ from scipy.optimize import linprog
 from scipy.sparse import coo_matrix
 
 from bille.instances import Instance
-from bille.instances.distances import INF, relaxed_for
+from bille.instances.distances import INF
 from bille.instances.moveset import Kind
 from bille.instances.run import Budget
 
 MAX_CELLS = 200
 
 
-def routing_bound(instance: Instance, by_target, budget: Budget | None = None) -> int | None:
+def routing_bound(instance: Instance, ground, budget: Budget | None = None) -> int | None:
     """``ceil(LP / m)`` of the module docstring, or None when the program is not built (too
-    many cells) or not solved within ``budget``.
-    ``by_target(graph, kind, n)`` lists ``(pose, cell)`` pairs."""
+    many cells) or not solved within ``budget``. ``ground`` (:class:`.bounds.Ground`) gives the
+    relaxed graphs and the ``(pose, cell)`` pairs of the events; within a class of schedules,
+    its ground's (the distances and events of every schedule of the class)."""
     world, state = instance.world, instance.start_state
     n = world.width * world.height
     graphs = list({id(g): g for g in world.graphs}.values())
     faces = {Kind.PICK: {}, Kind.PLACE: {}}  # kind -> graph id -> cell -> poses
     for g in graphs:
         for kind in faces:
-            poses, cells = by_target(g, kind, n)
+            poses, cells = ground.targets(g, kind, n)
             per = faces[kind].setdefault(id(g), {})
             for p, c in zip(poses.tolist(), cells.tolist()):
                 per.setdefault(c, []).append(p)
@@ -76,7 +77,7 @@ def routing_bound(instance: Instance, by_target, budget: Budget | None = None) -
     def from_sets(g, kind_from, kind_to):
         """``[i, j]``: least distance from a ``kind_from`` pose of ``cells[i]`` to a ``kind_to``
         pose of ``cells[j]`` for robots of ``g``."""
-        relaxed = relaxed_for(g)
+        relaxed = ground.relaxed(g)
         out = np.full((k, k), INF, dtype=np.int64)
         to = faces[kind_to][id(g)]
         dest = np.array([p for c in to for p in to[c]], dtype=np.int64)
@@ -92,7 +93,7 @@ def routing_bound(instance: Instance, by_target, budget: Budget | None = None) -
     ends = np.full(k, INF, dtype=np.int64)  # a walk from a place at cells[j] to some robot's end
     robot_rows = []
     for r, (g, p) in enumerate(zip(world.graphs, state.poses)):
-        relaxed = relaxed_for(g)
+        relaxed = ground.relaxed(g)
         here = relaxed.from_pose(p)
         to_goal = relaxed.to_front(goal_cells[r]) if goal_cells[r] >= 0 else np.zeros(g.num_poses, np.int64)
         first = Kind.PLACE if state.carrying[r] else Kind.PICK

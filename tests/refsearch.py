@@ -91,3 +91,59 @@ def walking_options(instance, state) -> list[list[int]]:
     graphs = instance.world.graphs
     return [[a for a in candidate_actions(instance, state, i) if graphs[i].kind[a] in (Kind.WAIT, Kind.MOTION)]
             for i in range(instance.num_robots)]
+
+
+def class_optimum(instance, rule: str, max_states: int = 5_000):
+    """Brute-force minimum makespan over the schedules of one class (``no-scaffold``,
+    ``keep-structure``, ``single-carry``; their definitions written again here from the
+    tiles' configurations, independently of bille.solvers.classes): a breadth-first search over
+    (state, cells changed so far) that never enters a configuration outside the class. Returns
+    ``(makespan, action ids [m, L])``, ``(None, None)`` when the class has no schedule, or
+    raises RuntimeError beyond ``max_states``."""
+    import numpy as np
+
+    from bille.instances.rules import goal_violation
+
+    world, start = instance.world, instance.start_state
+    S, G = instance.start.tiles, instance.goal_tiles
+    both, same = S | G, S == G
+
+    def admits(tiles, changed) -> bool:
+        if rule == "no-scaffold":
+            return not (tiles & ~both).any()
+        if (tiles[same] != S[same]).any():
+            return False
+        return rule == "keep-structure" or not (changed & (tiles == S)).any()  # changed back
+
+    none = np.zeros(len(S), bool)
+    parent = {(start.key(), none.tobytes()): None}
+    layer, depth = [(start, none)], 0
+    while layer:
+        for state, changed in layer:
+            if goal_violation(world, state, G, instance.goal_cells, depth) is None:
+                steps, key = [], (state.key(), changed.tobytes())
+                while parent[key] is not None:
+                    key, joint = parent[key]
+                    steps.append(joint)
+                ids = np.array(steps[::-1], dtype=np.int64).T.reshape(instance.num_robots, len(steps))
+                return depth, ids
+        nxt = []
+        for state, changed in layer:
+            if len(parent) > max_states:
+                raise RuntimeError("brute force: too many states")
+            options = [candidate_actions(instance, state, i) for i in range(instance.num_robots)]
+            for joint in itertools.product(*options):
+                new = apply(world, state, joint)
+                if not isinstance(new, State):
+                    continue
+                now = changed | (new.tiles != S) if rule == "single-carry" else changed
+                if not admits(new.tiles, now):
+                    continue
+                key = (new.key(), now.tobytes())
+                if key not in parent:
+                    parent[key] = ((state.key(), changed.tobytes()), joint)
+                    nxt.append((new, now))
+        if len(parent) > max_states:
+            raise RuntimeError("brute force: too many states")
+        layer, depth = nxt, depth + 1
+    return None, None
