@@ -1,0 +1,129 @@
+"""Classes of schedules and their bounds, against a brute force restricted to each class.
+
+A class bound is a theorem about the schedules of its class, so it may exceed the unconditional
+optimum but never the class's own optimum, which ``refsearch.class_optimum`` finds by a
+breadth-first search that never leaves the class (its rules written again from the definitions).
+"""
+from __future__ import annotations
+
+import pytest
+
+from bille.instances import load_instance
+from bille.instances.schedule import Schedule
+from bille.instances.bundled import bundled_path
+from bille.solvers import load_schedule, solve, validate
+from bille.solvers.bounds import lower_bound
+from bille.solvers.classes import BY_KEY, CLASSES, class_bounds, classes_of
+from helpers import make, sched
+from refsearch import class_optimum
+from test_soundness import MANY, QUICK, reference
+
+
+def check_classes(instances) -> dict:
+    """Every class bound against the class's brute-force optimum, every class schedule found
+    validated and recognised; returns counts of what was compared."""
+    counts = {"compared": 0, "above the optimum": 0, "empty": 0, "undecided": 0}
+    for inst in instances:
+        ref = reference(inst)
+        if ref.status != "optimal" or not inst.is_reconfiguration:
+            continue
+        bounds = class_bounds(inst, unconditional=lower_bound(inst).lower)
+        mine = classes_of(inst, ref.schedule)
+        for c in CLASSES:
+            try:
+                best, ids = class_optimum(inst, c.key)
+            except RuntimeError:
+                counts["undecided"] += 1
+                continue
+            got = bounds[c.key]
+            if best is None:  # the class has no schedule: the optimum's schedule is not in it
+                counts["empty"] += 1
+                assert c.key not in mine, (inst.name, c.key)
+                continue
+            assert not got.empty and got.lower <= best, (inst.name, c.key, got, best)
+            schedule = Schedule.from_ids(inst, ids)
+            assert validate(inst, schedule).valid
+            assert c.key in classes_of(inst, schedule), (inst.name, c.key)
+            if c.key in mine:  # an optimal schedule of the class is an optimum of the class
+                assert best == ref.lower_bound, (inst.name, c.key)
+            counts["compared"] += 1
+            counts["above the optimum"] += best > ref.lower_bound
+    return counts
+
+
+def test_class_bounds_never_exceed_the_class_optimum():
+    counts = check_classes([inst for inst in QUICK if inst.num_robots <= 2])  # three: minutes
+    # the classes matter: some cost more than the optimum, some have no schedule at all
+    assert counts["compared"] >= 30 and counts["above the optimum"] >= 2 and counts["empty"] >= 3, counts
+
+
+@pytest.mark.slow
+def test_class_bounds_never_exceed_the_class_optimum_on_many():
+    counts = check_classes(MANY[:120])
+    assert counts["compared"] >= 150 and counts["above the optimum"] >= 5 and counts["empty"] >= 10, counts
+
+
+NEEDS_SCAFFOLD = make("""
+    T.T.
+    TTT.""", [{"at": [2, 1]}, {"at": [0, 0], "carrying": True}], goal="""
+    T.TT
+    TTT.""", moveset="point")
+# robot 1 cannot pass robot 0 on the path of tiles: the optimum (3 steps) sets the carried tile
+# down on the empty cell (1, 0) for robot 0 to carry on to (3, 0)
+
+
+def test_a_schedule_with_scaffold_is_in_no_class():
+    result = solve(NEEDS_SCAFFOLD, "bfs")
+    assert result.status == "optimal" and result.metrics.makespan == 3
+    assert classes_of(NEEDS_SCAFFOLD, result.schedule) == []
+    for c in CLASSES:
+        assert class_optimum(NEEDS_SCAFFOLD, c.key) == (None, None)
+
+
+STRIP = make("""
+    TTT.
+    TTTT""", [{"at": [1, 0]}], goal="""
+    TT.T
+    TTTT""", moveset="point")
+STRAIGHT = ["pick-east", "south", "east", "east", "place-north"]
+
+
+@pytest.mark.parametrize("before, classes", [
+    ([], ["no-scaffold", "keep-structure", "single-carry"]),
+    (["pick-east", "place-east"], ["no-scaffold", "keep-structure"]),  # (2, 0) changes three times
+    (["pick-west", "place-west"], ["no-scaffold"]),  # (0, 0) is kept by the goal, but moved
+])
+def test_a_schedule_belongs_to_the_classes_its_tiles_keep_to(before, classes):
+    schedule = sched(" ".join(before + STRAIGHT))
+    assert validate(STRIP, schedule).valid
+    assert classes_of(STRIP, schedule) == classes
+
+
+def test_the_classes_nest():
+    # every schedule of single-carry keeps the structure, and every one that keeps it has no
+    # scaffold: so their bounds, and their optima, rise along the chain
+    for inst in QUICK[:12] + [STRIP, NEEDS_SCAFFOLD]:
+        if not inst.is_reconfiguration:
+            continue
+        got = class_bounds(inst)
+        values = [got[k].lower for k in ("no-scaffold", "keep-structure", "single-carry") if not got[k].empty]
+        assert values == sorted(values), (inst.name, got)
+
+
+@pytest.mark.parametrize("name", ["lt-1", "lt-4", "bridge-2"])
+def test_the_bundled_schedules_and_their_class_bounds(name):
+    inst = load_instance(bundled_path(name))
+    schedule = load_schedule(bundled_path(f"{name}.schedule"))
+    report = validate(inst, schedule)
+    assert report.valid
+    keys = classes_of(inst, schedule)
+    bounds = class_bounds(inst, unconditional=lower_bound(inst).lower)
+    for key in keys:
+        assert bounds[key].lower <= report.metrics.makespan, (key, bounds[key])
+
+
+def test_no_class_on_a_fixed_structure():
+    inst = load_instance(bundled_path("point-4"))
+    assert class_bounds(inst) == {}
+    assert classes_of(inst, solve(inst, "astar").schedule) == []
+    assert set(BY_KEY) == {"no-scaffold", "keep-structure", "single-carry"}
