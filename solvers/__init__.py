@@ -57,6 +57,12 @@ def solve(instance: Instance, method: str = "auto", progress=None, *, bound: boo
     contradiction between proofs: a lower bound above the makespan found, a schedule where a
     static argument proved that none exists, or ``optimal`` makespan without a matching proof.
 
+    Wherever the static bound is computed on an instance that moves tiles, the bounds of the
+    classes of schedules (:mod:`.classes`) are computed too, in the time left, into
+    ``stats["class_bounds"]``, and the classes the schedule belongs to into ``stats["classes"]``
+    (read from the schedule). They are never the result's ``lower_bound``, which holds for every
+    schedule; a schedule of a class shorter than the class's bound is a contradiction too.
+
     Ctrl-C, in the main thread, cancels the run's budget (:mod:`bille.instances.interrupts`): the
     method stops where it polls its budget, as when time runs out, and the call returns status
     ``interrupted`` with the best schedule and bound found; nothing unwinds through a solver. So
@@ -83,23 +89,23 @@ def solve(instance: Instance, method: str = "auto", progress=None, *, bound: boo
             if tell is not None and not callable(tell):
                 raise OptionError(f"{method}: {name} must be a function, got {tell!r}")
         budget = whole.child(limit)
-        result, bounds, bound_s = _run(instance, record, parsed, budget, Events(on_schedule, on_bound, progress),
-                                       bound)
+        result, bounds, classes, bound_s = _run(instance, record, parsed, budget,
+                                                Events(on_schedule, on_bound, progress), bound)
     if budget.cancelled and result.status in ("feasible", "timeout", "unsolved"):
         result = _dataclasses.replace(result, status="interrupted")
-    return _checked(instance, method, result, bounds, bound_s, budget.elapsed())
+    return _checked(instance, method, result, bounds, bound_s, budget.elapsed(), _raised(classes, result))
 
 
 def _run(instance: Instance, record, options, budget: Budget, told: Events, bound: bool):
-    """The method's result, the static bound (or None) and the seconds it took: the body of
-    :func:`solve` under its Ctrl-C handler."""
-    method, bounds, bound_s, progress = record.name, None, None, told.on_progress
+    """The method's result, the static bound and the class bounds (or None) and the seconds they
+    took: the body of :func:`solve` under its Ctrl-C handler."""
+    method, bounds, classes, bound_s, progress = record.name, None, None, None, told.on_progress
     kept = _Kept()  # what the method tells is kept here too, in case a KeyboardInterrupt ends it
     events = Events(_both(kept.schedule, told.on_schedule), _both(kept.bound, told.on_bound), progress)
     internal = {}
     try:
         if record.bound:  # the method searches from the bound: first, and it gets the time left
-            bounds, bound_s = _static_bound(instance, budget, progress)
+            bounds, classes, bound_s = _static_bound(instance, budget, progress)
             internal["bounds"] = bounds
         before = "computing the lower bound" if record.bound else "before the method ran"
         if budget.cancelled:
@@ -112,10 +118,10 @@ def _run(instance: Instance, record, options, budget: Budget, told: Events, boun
         result = kept.result(instance, method)
     if bound and bounds is None and result.status != "interrupted" and not budget.cancelled:
         try:  # after the method, in the time left
-            bounds, bound_s = _static_bound(instance, budget, progress)
+            bounds, classes, bound_s = _static_bound(instance, budget, progress)
         except KeyboardInterrupt:
             result = _dataclasses.replace(result, status="interrupted")
-    return result, bounds, bound_s
+    return result, bounds, classes, bound_s
 
 
 class _Kept:
@@ -146,15 +152,41 @@ def _both(first, second):
 
 
 def _static_bound(instance: Instance, budget: Budget, progress):
-    """The static bound, its slow part left out once ``budget`` expires, and the seconds it
-    took; ``progress`` is told it (with the seconds since the run began)."""
+    """The static bound, its slow part left out once ``budget`` expires, the class bounds
+    (:mod:`.classes`; None on a fixed structure, where the bound proves the instance
+    infeasible, or when the time is up), and the seconds they took; ``progress`` is told the
+    static bound (with the seconds since the run began)."""
     from .bounds import lower_bound
+    from .classes import applies, class_bounds
 
     began = budget.now()
     bounds = lower_bound(instance, budget=budget)
     if progress is not None:
         progress({"lower": bounds.lower, "best": None, "elapsed": budget.elapsed()})
-    return bounds, budget.now() - began
+    classes = None
+    if applies(instance) and not bounds.impossible and not budget.expired():
+        classes = class_bounds(instance, budget=budget, unconditional=bounds.lower)
+    return bounds, classes, budget.now() - began
+
+
+# the exact methods' restrictions (their proofs hold within them) by the class they are
+_RESTRICTED = {"keep_structure": "keep-structure", "single_carry": "single-carry"}
+
+
+def _raised(classes: dict | None, result: Result) -> dict | None:
+    """The class bounds raised by what the method proved: its bound for every schedule, and a
+    restricted exact search's bound within its class. None after a proof that no schedule
+    exists."""
+    from .classes import ClassBound, nested
+
+    if classes is None or result.status == "infeasible":
+        return None
+    out = {key: c if c.empty else ClassBound(key, max(c.lower, result.lower_bound or 0)) for key, c in classes.items()}
+    restricted = result.stats.get("restricted_lower_bound")
+    for flag, key in _RESTRICTED.items():
+        if result.stats.get(flag) and restricted is not None and not out[key].empty:
+            out[key] = ClassBound(key, max(out[key].lower, restricted))
+    return nested(out)
 
 
 def __getattr__(name: str):
@@ -165,19 +197,27 @@ def __getattr__(name: str):
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
-def _checked(instance: Instance, method: str, result: Result, bounds, bound_s: float | None, elapsed: float) -> Result:
+def _checked(instance: Instance, method: str, result: Result, bounds, bound_s: float | None, elapsed: float,
+             classes: dict | None = None) -> Result:
     """The method's result as solve() returns it: its schedule validated (once), the best lower
-    bound known, contradictions between proofs turned into status ``error``."""
+    bound known, the class bounds and the schedule's classes, contradictions between proofs
+    turned into status ``error``."""
     fields = dict(method=method, status=result.status, schedule=result.schedule, metrics=result.metrics,
                   lower_bound=_lower(result, bounds), time_s=elapsed, stats=dict(result.stats))
     if bounds is not None:
         fields["stats"].setdefault("bound_parts", bounds.parts)
         fields["stats"]["bound_s"] = round(bound_s, 3)
+    if classes is not None:
+        fields["stats"]["class_bounds"] = {key: c.to_json() for key, c in classes.items()}
     if result.schedule is not None:
         report = validate(instance, result.schedule)
         if report.valid:
             fields["metrics"] = report.metrics
-            _contradiction(fields, result, bounds)
+            if classes is not None:
+                from .classes import classes_of
+
+                fields["stats"]["classes"] = classes_of(instance, result.schedule)
+            _contradiction(fields, result, bounds, classes)
         else:
             fields.update(status="error", metrics=None)
             fields["stats"]["violation"] = str(report.violation)
@@ -194,14 +234,17 @@ def _lower(result: Result, bounds) -> int | None:
     return max(bounds.lower, result.lower_bound or 0)
 
 
-def _contradiction(fields: dict, result: Result, bounds) -> None:
+def _contradiction(fields: dict, result: Result, bounds, classes: dict | None = None) -> None:
     """Turn a result whose proofs contradict its valid schedule into status ``error``."""
     makespan, lower, stats = fields["metrics"].makespan, fields["lower_bound"], fields["stats"]
     why = None
+    broken = [key for key in stats.get("classes", ()) if classes[key].empty or classes[key].lower > makespan]
     if bounds is not None and bounds.impossible:
         why = f"a valid schedule of makespan {makespan}, but no schedule should exist: {'; '.join(bounds.impossible)}"
     elif lower is not None and lower > makespan:
         why = f"lower bound {lower} above the makespan {makespan} of a valid schedule"
+    elif broken:
+        why = f"a valid {broken[0]} schedule of makespan {makespan}, against the class's bound {classes[broken[0]]}"
     elif result.status == "optimal" and "objective" not in stats and result.lower_bound != makespan:
         why = f"optimal makespan {makespan} claimed with a proof of {result.lower_bound}"
     if why is not None:

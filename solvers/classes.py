@@ -49,14 +49,16 @@ from .bounds import Ground, lower_bound
 @dataclass(frozen=True)
 class ScheduleClass:
     """One class: its key (``no-scaffold``), its name in a sentence ("schedules without
-    scaffold"), its rule in words, its ground on an instance, and its test on the tiles'
-    configurations of a schedule (start first)."""
+    scaffold"), its rule in words, its ground on an instance, its test on the tiles'
+    configurations of a schedule (start first), and the class it is part of (whose bounds hold
+    for it too)."""
 
     key: str
     name: str
     rule: str
     ground: Callable[[Instance], Ground]
     contains: Callable[[Instance, list[np.ndarray]], bool]
+    within: str | None = None
 
 
 def _no_scaffold_ground(instance: Instance) -> Ground:
@@ -99,12 +101,12 @@ CLASSES: tuple[ScheduleClass, ...] = (
                   _no_scaffold_ground, _no_scaffold),
     ScheduleClass("keep-structure", "schedules that keep the structure",
                   "picks and places only where the start and the goal differ",
-                  _keep_ground, _keeps),
+                  _keep_ground, _keeps, within="no-scaffold"),
     ScheduleClass("single-carry", "single-carry schedules",
                   "every tile carried once, straight from its start cell to its goal cell",
-                  _single_ground, _single),
+                  _single_ground, _single, within="keep-structure"),
 )
-BY_KEY = {c.key: c for c in CLASSES}
+BY_KEY = {c.key: c for c in CLASSES}  # a class comes after the class it is part of
 
 
 @dataclass(frozen=True)
@@ -118,7 +120,23 @@ class ClassBound:
     why: tuple[str, ...] = ()
 
     def to_json(self) -> dict:
-        return {"lower_bound": self.lower, "empty": self.empty, **({"why": list(self.why)} if self.why else {})}
+        return {"lower_bound": self.lower, "empty": True, "why": list(self.why)} if self.empty else \
+            {"lower_bound": self.lower}
+
+
+def nested(bounds: dict[str, ClassBound]) -> dict[str, ClassBound]:
+    """``bounds`` with each class's bound at least that of the class it is part of (a bound on
+    a class holds for its part; a class with no schedule has no part with one)."""
+    out = dict(bounds)
+    for c in CLASSES:
+        outer = out.get(c.within) if c.within else None
+        if c.key not in out or outer is None or out[c.key].empty:
+            continue
+        if outer.empty:
+            out[c.key] = ClassBound(c.key, None, empty=True, why=outer.why)
+        elif outer.lower > out[c.key].lower:
+            out[c.key] = ClassBound(c.key, outer.lower)
+    return out
 
 
 def applies(instance: Instance) -> bool:
@@ -140,7 +158,7 @@ def class_bounds(instance: Instance, *, budget: Budget | None = None,
             out[c.key] = ClassBound(c.key, None, empty=True, why=tuple(got.impossible))
         else:
             out[c.key] = ClassBound(c.key, max(got.lower, unconditional or 0))
-    return out
+    return nested(out)
 
 
 def tiles_over_time(instance: Instance, ids: np.ndarray) -> list[np.ndarray]:
@@ -165,7 +183,27 @@ def classes_of(instance: Instance, schedule) -> list[str]:
     return [c.key for c in CLASSES if c.contains(instance, tiles)]
 
 
-def describe(classes: Iterable[str]) -> str:
-    """``"no-scaffold, keep-structure"``, or ``"none of them"``."""
-    keys = list(classes)
-    return ", ".join(keys) if keys else "none of them"
+def report(makespan: int | None, lower: int | None, bounds: dict, classes: Iterable[str] | None) -> list[str]:
+    """Lines for a user: the bound for every schedule (and the certified gap of ``makespan``),
+    then each class's bound, its rule, and whether the schedule belongs to it (and its gap
+    within the class). ``bounds``: ``stats["class_bounds"]`` of a result; ``classes``: its
+    ``stats["classes"]`` (None without a schedule)."""
+    def gap(base):
+        return f"{100 * (makespan - base) / base:.1f} %" if base else "undefined (bound 0)"
+
+    out = []
+    if lower is not None:
+        certified = f" (certified gap {gap(lower)})" if makespan is not None else ""
+        out.append(f"makespan >= {lower} for every schedule{certified}")
+    member = set(classes or ())
+    for c in CLASSES:
+        got = bounds.get(c.key)
+        if got is None:
+            continue
+        value = "no schedule at all" if got.get("empty") else f"makespan >= {got['lower_bound']}"
+        line = f"{value} for {c.name} ({c.rule})"
+        if classes is not None:
+            line += f"; this schedule is one, gap within the class {gap(got['lower_bound'])}" if c.key in member \
+                else "; this schedule is not one"
+        out.append(line)
+    return out

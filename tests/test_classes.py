@@ -127,3 +127,27 @@ def test_no_class_on_a_fixed_structure():
     assert class_bounds(inst) == {}
     assert classes_of(inst, solve(inst, "astar").schedule) == []
     assert set(BY_KEY) == {"no-scaffold", "keep-structure", "single-carry"}
+
+
+def test_solve_reports_the_class_bounds_beside_the_bound_for_every_schedule():
+    result = solve(STRIP, "bfs", bound=True)
+    assert result.status == "optimal" and result.lower_bound == result.metrics.makespan == 5
+    assert result.stats["classes"] == ["no-scaffold", "keep-structure", "single-carry"]
+    got = result.stats["class_bounds"]
+    assert set(got) == set(BY_KEY) and all(got[k]["lower_bound"] <= 5 for k in got)
+    scaffold = solve(NEEDS_SCAFFOLD, "bfs", bound=True)
+    assert scaffold.stats["classes"] == [] and scaffold.lower_bound <= 3
+    assert "class_bounds" not in solve(STRIP, "bfs").stats  # only where the bound is computed
+
+
+def test_a_schedule_below_its_class_bound_is_a_contradiction(monkeypatch):
+    import bille.solvers.classes as classes
+
+    real = classes.class_bounds
+
+    def too_high(instance, **kw):  # a broken class bound: one more than this instance's optimum
+        return {k: classes.ClassBound(k, 6) for k in real(instance, **kw)}
+
+    monkeypatch.setattr(classes, "class_bounds", too_high)
+    result = solve(STRIP, "bfs", bound=True)
+    assert result.status == "error" and "no-scaffold schedule of makespan 5" in result.stats["contradiction"]

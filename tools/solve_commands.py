@@ -84,6 +84,12 @@ def solve_(instance: str, method: str, epsilon, horizon, time_limit, threads, lo
         click.echo(f"objective: {result.stats['objective']}")
     if "restricted_lower_bound" in result.stats:
         click.echo(f"lower bound among those schedules: {result.stats['restricted_lower_bound']}")
+    if "class_bounds" in result.stats:
+        from bille.solvers.classes import report
+
+        makespan = result.metrics.makespan if result.metrics else None
+        for line in report(makespan, result.lower_bound, result.stats["class_bounds"], result.stats.get("classes")):
+            click.echo(line)
     for key in ("unreachable", "failure", "reason", "violation"):
         if key in result.stats:
             click.echo(f"{key}: {_explain(inst, key, result.stats[key])}")
