@@ -151,3 +151,14 @@ def test_a_schedule_below_its_class_bound_is_a_contradiction(monkeypatch):
     monkeypatch.setattr(classes, "class_bounds", too_high)
     result = solve(STRIP, "bfs", bound=True)
     assert result.status == "error" and "no-scaffold schedule of makespan 5" in result.stats["contradiction"]
+
+
+def test_the_gap_report_shows_each_schedules_class_and_its_gap_within():
+    from bille.tools.gap import parse_configs, run
+
+    rows = run([STRIP, NEEDS_SCAFFOLD], parse_configs("bfs"), time_limit=30)
+    strip, scaffold = rows
+    assert strip["classes"] == "no-scaffold keep-structure single-carry" and strip["class"] == "single-carry"
+    assert strip["class_lower_bound"] <= strip["makespan"] == 5
+    assert strip["class_gap_percent"] == round(100 * (5 - strip["class_lower_bound"]) / strip["class_lower_bound"], 1)
+    assert scaffold["classes"] == "" and scaffold["class"] is None and scaffold["class_gap_percent"] is None

@@ -11,7 +11,12 @@ Every method configuration runs on every instance under the same time limit. Per
 - ``best``: the shortest valid schedule of the run;
 - per row, ``certified_gap_percent`` = (makespan - lower_bound) / lower_bound: how much longer
   the schedule is than the optimum *at most*, whatever the optimum; and ``gap_percent``, the
-  exact gap, where some method proved the optimum.
+  exact gap, where some method proved the optimum;
+- on an instance that moves tiles, ``classes``: the classes of schedules the row's schedule
+  belongs to (:mod:`bille.solvers.classes`, read from the schedule), and against the narrowest
+  of them (``class``), ``class_lower_bound`` (the best bound on that class proved in the run) and
+  ``class_gap_percent``: how much longer the schedule is than the best schedule *of its class*,
+  at most. A class gap is not a certified gap: a schedule outside the class may be shorter.
 
 Interrupted (Ctrl-C), the report holds the instances' rows finished so far, measured the same
 way (:class:`Interrupted`).
@@ -38,7 +43,8 @@ from .common import shown_status
 from .tables import text_table
 
 FIELDS = ["instance", "method", "status", "makespan", "own_lower_bound", "lower_bound", "best", "tiles_traveled",
-          "time_s", "gap_percent", "certified_gap_percent", "note"]
+          "time_s", "gap_percent", "certified_gap_percent", "classes", "class", "class_lower_bound",
+          "class_gap_percent", "note"]
 ALIASES = {"H": "horizon", "d-tr": "d_tr", "eps": "epsilon"}
 SHOWN_STATUS = {"unsolved": "gave up", "timeout": "out of time"}
 
@@ -163,13 +169,17 @@ def check_files(instances: list[Instance], files: dict) -> None:
             raise OptionError(f"{label} is valid for none of the instances ({'; '.join(reasons)})")
 
 
-def _row(inst, label, status, metrics=None, lower=None, time_s=None, note="", objective=None) -> dict:
+def _row(inst, label, status, metrics=None, lower=None, time_s=None, note="", objective=None, classes=None,
+         class_bounds=None) -> dict:
     """A row of the report; ``objective`` (not written to the CSV) is what an ``optimal`` status
-    is optimal for when it is not the makespan (``stats.objective``)."""
+    is optimal for when it is not the makespan (``stats.objective``); ``class_bounds`` (not
+    written either) the class bounds the row's solve proved."""
     return dict(instance=inst.name, method=label, status=status, makespan=metrics.makespan if metrics else None,
                 own_lower_bound=lower, lower_bound=None, best=None,
                 tiles_traveled=metrics.tiles_traveled if metrics else None, time_s=time_s, gap_percent=None,
-                certified_gap_percent=None, note=note, objective=objective)
+                certified_gap_percent=None, classes=None if classes is None else " ".join(classes),
+                class_lower_bound=None, class_gap_percent=None, **{"class": None}, note=note, objective=objective,
+                own_class_bounds=class_bounds or {})
 
 
 def _solve_row(inst, config: Config, time_limit, threads, progress, schedules) -> dict:
@@ -190,14 +200,17 @@ def _solve_row(inst, config: Config, time_limit, threads, progress, schedules) -
     if not note and objective:
         note = f"optimizes: {objective}"
     return _row(inst, config.label, result.status, result.metrics, result.lower_bound, round(result.time_s, 3), note,
-                objective)
+                objective, result.stats.get("classes"), result.stats.get("class_bounds"))
 
 
 def _file_row(inst, label, schedule, schedules) -> dict:
     report = validate(inst, schedule)
     if schedules is not None:
         schedules[inst.name, label] = schedule
-    return _row(inst, label, "given", report.metrics, note="schedule file")
+    from bille.solvers.classes import applies, classes_of
+
+    return _row(inst, label, "given", report.metrics, note="schedule file",
+                classes=classes_of(inst, schedule) if applies(inst) else None)
 
 
 def _certify(inst: Instance, rows: list[dict]) -> None:
@@ -227,6 +240,32 @@ def _certify(inst: Instance, rows: list[dict]) -> None:
             r["gap_percent"] = _percent(r["makespan"], optimum)
         if lower is not None:
             r["certified_gap_percent"] = _percent(r["makespan"], lower)
+    _certify_classes(inst, rows)
+
+
+def _certify_classes(inst: Instance, rows: list[dict]) -> None:
+    """Each row's gap within the narrowest class its schedule belongs to, against the best
+    bound on that class proved by any row (a row whose proofs contradicted its schedule proves
+    nothing)."""
+    from bille.solvers.classes import CLASSES
+
+    best: dict[str, int] = {}
+    for r in rows:
+        if r["status"] == "error":
+            continue
+        for key, got in r["own_class_bounds"].items():
+            if got.get("lower_bound") is not None:
+                best[key] = max(best.get(key, 0), got["lower_bound"])
+    for r in rows:
+        mine = [c.key for c in CLASSES if r["classes"] and c.key in r["classes"].split() and c.key in best]
+        if r["makespan"] is None or not mine:
+            continue
+        key = mine[-1]  # the classes nest: the last one is the narrowest, with the highest bound
+        if best[key] > r["makespan"]:
+            raise BilleError(f"{inst.name}: a {key} bound of {best[key]} above a valid {key} schedule of "
+                             f"{r['makespan']} steps")
+        r["class"], r["class_lower_bound"] = key, best[key]
+        r["class_gap_percent"] = _percent(r["makespan"], best[key])
 
 
 def _file_claim(inst: Instance, best: int | None) -> str:
@@ -246,14 +285,23 @@ def _percent(makespan: int, base: int) -> float:
 
 def table(rows: list[dict]) -> list[str]:
     columns = ["instance", "method", "status", "makespan", "LB", "best", "tiles", "time [s]", "gap", "certified",
-               "note"]
+               "in class (LB)", "class gap", "note"]
     return text_table(columns, [[r["instance"], r["method"],
                                  SHOWN_STATUS.get(r["status"], shown_status(r["status"], r.get("objective"))),
                                  r["makespan"], r["lower_bound"], r["best"], r["tiles_traveled"],
                                  _show(r["time_s"], "{:.3f}"), _show(r["gap_percent"], "{:+.1f}%"),
-                                 _show(r["certified_gap_percent"], "<= {:.1f}%"), r["note"]]
+                                 _show(r["certified_gap_percent"], "<= {:.1f}%"), _in_class(r),
+                                 _show(r["class_gap_percent"], "<= {:.1f}%"), r["note"]]
                                 for r in rows],
                       right={"makespan", "LB", "best", "tiles", "time [s]", "gap", "certified"})
+
+
+def _in_class(r: dict) -> str | None:
+    if r["classes"] is None or r["makespan"] is None:
+        return None
+    if not r["classes"]:
+        return "none"
+    return None if r["class"] is None else f"{r['class_lower_bound']} ({r['class']})"
 
 
 def summary(rows: list[dict]) -> list[str]:
