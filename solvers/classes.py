@@ -23,9 +23,16 @@ with a tile at the start and in the goal:
 
 **The bound of a class** (:func:`class_bounds`) is the static bound of :mod:`.bounds` computed on
 the class's *ground* (:class:`.bounds.Ground`). In a schedule of ``no-scaffold``, every tile at
-every step is on a cell of ``S | G``; a robot's feet stand on tiles (rule 4), so every pose it
-takes has both feet in ``S | G``, and a pick or a place targets a cell that holds a tile just
-before or just after, also in ``S | G``. In ``keep-structure``, besides, a pick or place changes
+every step is on a cell of ``A = S | G``; a robot's feet stand on tiles (rule 4), so every pose it
+takes has both feet in ``A``, and a pick or a place targets a cell that holds a tile just before
+or just after, also in ``A``. Besides, some cells of ``A`` are *pinned* (:func:`pinned`): take
+``N`` tiles in all (on the grid and carried at the start; picks and places only move them) and
+``m`` robots. A robot picks at ``c`` only from a tile there (rule 1) and no robot places at ``c``
+in that step (a place needs it empty before), so after the step ``c`` is empty, at least ``N - m``
+tiles lie on the grid (a robot holds one at most), all in ``A - {c}``, and they are 4-connected
+(rule 5): all in one component of ``A - {c}``. So where every component of ``A - {c}`` has fewer
+than ``N - m`` cells, no schedule of the class ever picks at ``c``; if ``c`` holds a tile at the
+start, it holds one for ever, and no place targets it either. In ``keep-structure``, besides, a pick or place changes
 its cell, so it targets a cell where ``S`` and ``G`` differ; in ``single-carry``, a pick empties
 a cell for good and a place fills one for good, so picks target cells of ``S - G`` and places
 cells of ``G - S``. The bounds module's proofs hold for every schedule whose poses and events lie
@@ -61,9 +68,30 @@ class ScheduleClass:
     within: str | None = None
 
 
+def pinned(instance: Instance, cells: np.ndarray) -> np.ndarray:
+    """Mask of the cells ``c`` of ``cells`` such that every 4-connected component of ``cells``
+    without ``c`` is smaller than ``N - m`` (``N`` tiles in all, ``m`` robots): where every tile
+    stays on ``cells``, no tile is ever picked at ``c`` (module docstring)."""
+    from bille.instances.grid import articulation_points, components
+
+    w, h = instance.width, instance.height
+    least = int(instance.start.tiles.sum()) + int(sum(instance.start_state.carrying)) - instance.num_robots
+    out = np.zeros_like(cells)
+    if int(cells.sum()) - 1 < least:  # too few cells left whatever the cell taken out
+        out[:] = cells
+        return out
+    for c in np.flatnonzero(articulation_points(cells, w, h)):
+        rest = cells.copy()
+        rest[c] = False
+        labels, count = components(rest, w, h)
+        out[c] = np.bincount(labels)[1:].max(initial=0) < least
+    return out
+
+
 def _no_scaffold_ground(instance: Instance) -> Ground:
     both = instance.start.tiles | instance.goal_tiles
-    return Ground(feet=both, picks=both, places=both)
+    fixed = pinned(instance, both)
+    return Ground(feet=both, picks=both & ~fixed, places=both & ~(fixed & instance.start.tiles))
 
 
 def _no_scaffold(instance: Instance, tiles: list[np.ndarray]) -> bool:

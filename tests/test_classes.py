@@ -17,6 +17,7 @@ from bille.solvers.classes import BY_KEY, CLASSES, class_bounds, classes_of
 from helpers import make, sched
 from refsearch import class_optimum
 from test_soundness import MANY, QUICK, reference
+from tinyworlds import bridge_instance
 
 
 def check_classes(instances) -> dict:
@@ -61,6 +62,13 @@ def test_class_bounds_never_exceed_the_class_optimum():
 def test_class_bounds_never_exceed_the_class_optimum_on_many():
     counts = check_classes(MANY[:120])
     assert counts["compared"] >= 150 and counts["above the optimum"] >= 5 and counts["empty"] >= 10, counts
+
+
+@pytest.mark.slow
+def test_class_bounds_never_exceed_the_class_optimum_across_a_bridge():
+    bridges = [inst for inst in map(bridge_instance, range(60)) if inst is not None]
+    counts = check_classes(bridges)
+    assert counts["compared"] >= 40 and counts["above the optimum"] >= 3, counts
 
 
 NEEDS_SCAFFOLD = make("""
@@ -162,3 +170,26 @@ def test_the_gap_report_shows_each_schedules_class_and_its_gap_within():
     assert strip["class_lower_bound"] <= strip["makespan"] == 5
     assert strip["class_gap_percent"] == round(100 * (5 - strip["class_lower_bound"]) / strip["class_lower_bound"], 1)
     assert scaffold["classes"] == "" and scaffold["class"] is None and scaffold["class_gap_percent"] is None
+
+
+BRIDGE = make("""
+    TT...T.
+    TTTTTTT""", [{"at": [5, 1]}], goal="""
+    .T...TT
+    TTTTTTT""", moveset="point")
+# 12 tiles, one robot: picking any cell of the bridge (2..4, 1) would leave fewer than 11 cells on
+# either side, so without scaffold the tile must walk round by the bridge, and it cannot be
+# relayed over it
+
+
+def test_pinned_cells_raise_the_no_scaffold_bound_to_the_class_optimum():
+    from bille.solvers.bounds import Ground
+    from bille.solvers.classes import pinned
+
+    both = BRIDGE.start.tiles | BRIDGE.goal_tiles
+    assert sorted(BRIDGE.world.xy(c) for c in pinned(BRIDGE, both).nonzero()[0]) == \
+        [(1, 1), (2, 1), (3, 1), (4, 1), (5, 1)]
+    loose = lower_bound(BRIDGE, ground=Ground(feet=both, picks=both, places=both)).lower
+    got = class_bounds(BRIDGE)["no-scaffold"].lower
+    best, _ = class_optimum(BRIDGE, "no-scaffold")
+    assert loose < got == best == 13

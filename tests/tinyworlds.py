@@ -113,3 +113,29 @@ def tiny_instances(count: int, first_seed: int = 0, **kw) -> list:
         if inst is not None and inst.is_reconfiguration:
             out.append(inst)
     return out
+
+
+def bridge_instance(seed: int):
+    """Two platforms two columns wide joined by a bridge one cell high and 1-3 long; one tile of
+    the west platform goes to the east one; 1-2 point robots. The bridge's cells are often
+    pinned (no tile can leave them without splitting the structure), so a schedule without
+    scaffold walks the tile round, and relays may need tiles set down in the gap."""
+    rnd = Random(seed)
+    span, H = rnd.choice([1, 2, 3]), rnd.choice([2, 3])
+    W, row, out, into = 4 + span, rnd.randrange(H), rnd.randrange(H), rnd.randrange(H)
+    if out == row or into == row:
+        return None
+    start = {(x, y) for y in range(H) for x in (0, 1, W - 2, W - 1)} | {(x, row) for x in range(2, 2 + span)}
+    start.discard((W - 1, into))
+    goal = (start - {(0, out)}) | {(W - 1, into)}
+    cells = sorted(start)
+    robots = [{"at": list(c)} for c in rnd.sample(cells, rnd.choice([1, 2]))]
+    def block(tiles):
+        return "".join(f"  {line}\n" for line in _draw(tiles, W, H).splitlines())
+
+    text = (f"name: bridge-tiny-{seed}\nmoveset: point\ngrid: |\n{block(start)}goal: |\n{block(goal)}"
+            f"robots: {json.dumps(robots)}\n")
+    try:
+        return instance_from_text(text, f"bridge-tiny-{seed}")
+    except InstanceError:
+        return None
