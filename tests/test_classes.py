@@ -193,3 +193,24 @@ def test_pinned_cells_raise_the_no_scaffold_bound_to_the_class_optimum():
     got = class_bounds(BRIDGE)["no-scaffold"].lower
     best, _ = class_optimum(BRIDGE, "no-scaffold")
     assert loose < got == best == 13
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("restriction", ["keep_structure", "single_carry"])
+def test_a_restricted_exact_search_starts_at_its_class_bound_and_finds_the_class_optimum(restriction):
+    key = restriction.replace("_", "-")
+    compared = 0
+    for inst in [BRIDGE, STRIP] + [i for i in QUICK if i.num_robots <= 2][:10]:
+        if not inst.is_reconfiguration:
+            continue
+        best, _ = class_optimum(inst, key)
+        result = solve(inst, "cpsat", time_limit=60, **{restriction: True})
+        if best is None:
+            assert result.status in ("unsolved", "infeasible") and result.schedule is None, (inst.name, result.status)
+            continue
+        assert result.status == "optimal" and result.metrics.makespan == best, (inst.name, result.status, best)
+        assert key in result.stats["classes"] and result.stats["restricted_lower_bound"] == best
+        ref = reference(inst)  # the bound for every schedule stays one: never the class's
+        assert ref.status != "optimal" or result.lower_bound <= ref.lower_bound
+        compared += 1
+    assert compared >= 6

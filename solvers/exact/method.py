@@ -34,7 +34,7 @@ from bille.encodings.model import CONNECTIVITY, Options
 from bille.instances import Instance, OptionError
 from bille.instances.options import MethodOptions, option
 from bille.instances.result import Result
-from bille.instances.run import Run
+from bille.instances.run import Budget, Run
 from bille.instances.rules import goal_violation
 from bille.instances.schedule import Schedule
 
@@ -155,14 +155,19 @@ def makespan_search(job: Job, instance: Instance, run: Run | None, max_makespan:
     run = run or Run()
     budget = run.budget.child()  # started now: the search's own time
     bounds = bounds or lower_bound(instance)
-    cap = default_cap(bounds.lower) if max_makespan is None else max_makespan
+    within = _class_bound(job, instance, bounds, budget)
+    start = bounds.lower if within is None or within.empty else max(bounds.lower, within.lower)
+    cap = default_cap(start) if max_makespan is None else max_makespan
     if cap < bounds.lower:
         raise OptionError(f"{method}: the horizon cap {cap} is below the makespan lower bound "
                           f"{bounds.lower} ({_parts(bounds.parts)})")
-    search = Search(job, instance, budget, bounds, cap, run.events.progress)
+    search = Search(job, instance, budget, bounds, cap, run.events.progress, start=start)
     if bounds.impossible:
         search.stats["reason"] = "; ".join(bounds.impossible)
         return search.result("infeasible")
+    if within is not None and within.empty:  # a proof for the restriction only: not "infeasible"
+        search.stats["failure"] = f"no {RESTRICTIONS[job.restriction][1]} exists: {'; '.join(within.why)}"
+        return search.result("unsolved")
     if goal_violation(instance.world, instance.start_state, instance.goal_tiles, instance.goal_cells, 0) is None:
         search.stats["tiles_traveled_optimal"] = True
         return search.result("optimal", np.zeros((instance.num_robots, 0), dtype=np.int64), lower=0)
@@ -173,6 +178,18 @@ def makespan_search(job: Job, instance: Instance, run: Run | None, max_makespan:
         return parallel(search) if job.threads >= 2 and job.first_horizon is None else sequential(search)
     except KeyboardInterrupt:  # Ctrl-C: the best schedule and the bound proved so far
         return search.interrupted()
+
+
+def _class_bound(job: Job, instance: Instance, bounds: Bounds, budget: Budget):
+    """For a restricted search, the bound of its class of schedules (:mod:`bille.solvers.classes`:
+    ``keep_structure`` and ``single_carry`` are the classes ``keep-structure`` and ``single-carry``),
+    where its horizons start: every horizon below it has no schedule of the class. None for an
+    unrestricted search or where the static bound proves the instance infeasible."""
+    if job.restriction is None or bounds.impossible:
+        return None
+    from bille.solvers.classes import class_bounds
+
+    return class_bounds(instance, budget=budget, unconditional=bounds.lower)[job.restriction.replace("_", "-")]
 
 
 def _find_incumbent(search: Search, given: Schedule | None, cap_given: bool) -> bool:

@@ -67,10 +67,12 @@ class Search:
     one above it; ``stats`` the result's statistics; ``budget`` the search's (narrowed while tiles
     traveled are minimized, :meth:`travel_budget`)."""
 
-    def __init__(self, job: Job, instance: Instance, budget: Budget, bounds, cap: int, progress: Callable | None):
+    def __init__(self, job: Job, instance: Instance, budget: Budget, bounds, cap: int, progress: Callable | None,
+                 start: int | None = None):
         self.job, self.instance, self.budget, self.bounds = job, instance, budget, bounds
         self.cap, self.progress = cap, progress
-        self.proved_below = max(1, bounds.lower)
+        # the first horizon: the static bound, or a restricted search's bound on its class
+        self.proved_below = max(1, bounds.lower, start or 0)
         self.incumbent: np.ndarray | None = None
         self.fallback: np.ndarray | None = None
         self.stats = {"lower_bound": bounds.lower, "bound_parts": bounds.parts, "horizon_cap": cap,
@@ -79,6 +81,7 @@ class Search:
         if job.restriction is not None:
             self.stats[job.restriction] = True
             self.stats["objective"] = RESTRICTIONS[job.restriction][0]
+            self.stats["restricted_lower_bound"] = self.proved_below
 
     def solve(self, backend: Backend, assumptions=(), **objective) -> Outcome:
         """``backend.solve`` within the budget, its cuts counted in ``stats``."""
