@@ -244,7 +244,9 @@ def _contradiction(fields: dict, result: Result, bounds, classes: dict | None = 
     elif lower is not None and lower > makespan:
         why = f"lower bound {lower} above the makespan {makespan} of a valid schedule"
     elif broken:
-        why = f"a valid {broken[0]} schedule of makespan {makespan}, against the class's bound {classes[broken[0]]}"
+        said = classes[broken[0]]
+        why = (f"a valid {broken[0]} schedule of makespan {makespan}, but "
+               + ("that class should have no schedule" if said.empty else f"the class's lower bound is {said.lower}"))
     elif result.status == "optimal" and "objective" not in stats and result.lower_bound != makespan:
         why = f"optimal makespan {makespan} claimed with a proof of {result.lower_bound}"
     if why is not None:
