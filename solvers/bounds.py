@@ -53,6 +53,11 @@ graph (:mod:`bille.instances.distances`): no schedule walks between two poses fa
     The carries together with the walks back for more tiles, as a flow of robots through pick
     and place events with tiles conserved cell by cell: a linear program whose minimum bounds
     the actions of every schedule (:mod:`.routing`, whose docstring proves it).
+``scaffold scenarios (LP)``
+    The same program split by which thin columns (or rows) of the map ever hold a tile set down
+    where neither the start nor the goal has one, with the places that scaffold costs: the least
+    over those scenarios, by a branch and bound that may stop at any time (:mod:`.scaffold`,
+    whose docstring proves it).
 
 Static infeasibility (``impossible``): tiles to move and no robot; a robot whose goal cell is unreachable; a cell of ``F``
 that no robot can ever place on (the bound above is infinite); a cell of ``R`` that no robot
@@ -80,40 +85,20 @@ from scipy.optimize import linear_sum_assignment
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
-from bille.instances import Instance, PoseGraph
-from bille.instances.distances import INF, manipulates_ahead, relaxed_for
+from bille.instances import Instance
+from bille.instances.distances import INF, manipulates_ahead
 from bille.instances.moveset import Kind
 from bille.instances.run import Budget
 
+from .ground import EVERYWHERE, Ground
 from .routing import routing_bound
+from .scaffold import scaffold_bound
 
 
-@dataclass(frozen=True, eq=False)
-class Ground:
-    """Where the schedules considered can stand and work: ``feet`` the cells a foot may stand
-    on, ``picks`` and ``places`` the cells those actions may target (masks over the cells;
-    None: every cell). :data:`EVERYWHERE` is every schedule's."""
-
-    feet: np.ndarray | None = None
-    picks: np.ndarray | None = None
-    places: np.ndarray | None = None
-
-    def relaxed(self, graph: PoseGraph):
-        """The relaxed pose graph of ``graph`` on the ground."""
-        return relaxed_for(graph, self.feet)
-
-    def targets(self, graph: PoseGraph, kind: Kind, n: int) -> tuple[np.ndarray, np.ndarray]:
-        """Pairs ``(pose, cell)``: from a pose of the ground, an action of ``kind`` targets a
-        cell it may target."""
-        poses, cells = _by_target(graph, kind, n)
-        keep = self.relaxed(graph).poses[poses]
-        allowed = self.picks if kind == Kind.PICK else self.places
-        if allowed is not None:
-            keep &= allowed[cells]
-        return poses[keep], cells[keep]
-
-
-EVERYWHERE = Ground()
+def SCAFFOLD_SHARE(budget: Budget | None) -> Budget | None:
+    """The scaffold scenarios' time: a quarter of what is left of ``budget`` (at most
+    :data:`.scaffold.SECONDS`)."""
+    return None if budget is None else budget.share(0.25)
 
 
 @dataclass
@@ -171,6 +156,9 @@ def lower_bound(instance: Instance, *, budget: Budget | None = None, ground: Gro
         else:
             parts["carrying (matching)"] = -(-(carry + carried) // m)
             parts["routing (LP)"] = routing_bound(instance, ground, budget)
+            if ground is EVERYWHERE:  # within a class's ground, scaffold is already priced or ruled out
+                best = max([v for v in parts.values() if v is not None] + [0])
+                parts["scaffold scenarios (LP)"] = scaffold_bound(instance, SCAFFOLD_SHARE(budget), floor=best)
     lower = max([v for v in parts.values() if v is not None] + [0])
     return Bounds(lower, parts, impossible)
 
@@ -186,16 +174,6 @@ def _worst(earliest: np.ndarray, cells: np.ndarray, world, impossible: list[str]
         impossible.append(why.format(world.xy(int(bad))))
         return None
     return int(values.max())
-
-
-def _by_target(graph: PoseGraph, kind: Kind, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """Pairs ``(pose, cell)``: from the valid ``pose``, an action of ``kind`` targets ``cell``."""
-    acts = np.flatnonzero(graph.kind == kind)
-    if not len(acts):
-        return np.zeros(0, np.int64), np.zeros(0, np.int64)
-    ok = (graph.target[:, acts] >= 0) & (graph.succ[:, acts] >= 0) & graph.valid[:, None]
-    p, a = np.nonzero(ok)
-    return p.astype(np.int64), graph.target[p, acts[a]].astype(np.int64)
 
 
 def _first_places(world, ground: Ground, from_start, carrying, fill) -> np.ndarray:

@@ -22,7 +22,7 @@ with a tile at the start and in the goal:
     its start cell to its goal cell (the exact methods' ``single_carry`` restriction).
 
 **The bound of a class** (:func:`class_bounds`) is the static bound of :mod:`.bounds` computed on
-the class's *ground* (:class:`.bounds.Ground`). In a schedule of ``no-scaffold``, every tile at
+the class's *ground* (:class:`.ground.Ground`). In a schedule of ``no-scaffold``, every tile at
 every step is on a cell of ``A = S | G``; a robot's feet stand on tiles (rule 4), so every pose it
 takes has both feet in ``A``, and a pick or a place targets a cell that holds a tile just before
 or just after, also in ``A``. Besides, some cells of ``A`` are *pinned* (:func:`pinned`): take
@@ -50,7 +50,8 @@ import numpy as np
 from bille.instances import Instance
 from bille.instances.run import Budget
 
-from .bounds import Ground, lower_bound
+from .bounds import lower_bound
+from .ground import Ground
 
 
 @dataclass(frozen=True)

@@ -46,11 +46,14 @@ from bille.instances.run import Budget
 MAX_CELLS = 200
 
 
-def routing_bound(instance: Instance, ground, budget: Budget | None = None) -> int | None:
+def routing_bound(instance: Instance, ground, budget: Budget | None = None, places=()) -> int | None:
     """``ceil(LP / m)`` of the module docstring, or None when the program is not built (too
-    many cells) or not solved within ``budget``. ``ground`` (:class:`.bounds.Ground`) gives the
-    relaxed graphs and the ``(pose, cell)`` pairs of the events; within a class of schedules,
-    its ground's (the distances and events of every schedule of the class)."""
+    many cells) or not solved (within ``budget``, or not at all: infeasible). ``ground``
+    (:class:`.ground.Ground`) gives the relaxed graphs and the ``(pose, cell)`` pairs of the
+    events; within a class of schedules, its ground's (the distances and events of every
+    schedule of the class). ``places``: groups of cells, each of which the schedules considered
+    place a tile on at least once (a row ``sum of the places on the group >= 1`` each: the flow
+    of such a schedule meets it); a group no robot can place on gives None."""
     world, state = instance.world, instance.start_state
     n = world.width * world.height
     graphs = list({id(g): g for g in world.graphs}.values())
@@ -101,7 +104,10 @@ def routing_bound(instance: Instance, ground, budget: Budget | None = None) -> i
         robot_rows.append((row, int(to_goal[p]), bool(state.carrying[r])))
         place = faces[Kind.PLACE][id(g)]
         ends = np.minimum(ends, [to_goal[place[c]].min() if c in place else INF for c in cells])
-    return _solve(k, m, balance, carry, walk, ends, robot_rows, budget)
+    groups = [[index[c] for c in group if c in index] for group in places]
+    if not all(groups):
+        return None
+    return _solve(k, m, balance, carry, walk, ends, robot_rows, budget, groups)
 
 
 def _mask(n: int, cells: list[int]) -> np.ndarray:
@@ -110,11 +116,12 @@ def _mask(n: int, cells: list[int]) -> np.ndarray:
     return out
 
 
-def _solve(k, m, balance, carry, walk, ends, robot_rows, budget: Budget | None) -> int | None:
+def _solve(k, m, balance, carry, walk, ends, robot_rows, budget: Budget | None, groups=()) -> int | None:
     """Build and solve the program: variables are arc flows; rows are the robot supplies (0 ..
     m-1), the conservation at the pick nodes (``K``) and the place nodes (``P``: inflow minus
     outflow is 0), and the tile balance per cell (``B``: arcs into its place node minus arcs
-    into its pick node)."""
+    into its pick node); then one inequality per group of place nodes (``groups``, indices of
+    cells): the arcs into them sum to at least 1."""
     K, P, B = m, m + k, m + 2 * k  # first row of each block
     costs, entries = [], []  # per block of arcs: costs, and (rows, values) per entry
 
@@ -155,7 +162,14 @@ def _solve(k, m, balance, carry, walk, ends, robot_rows, budget: Budget | None) 
         return None
     if seconds is not None:
         options["time_limit"] = seconds
-    got = linprog(np.concatenate(costs), A_eq=a, b_eq=b, bounds=(0, None), method="highs", options=options)
+    bounds_ub = {}
+    if groups:  # arcs into a place node: its conservation row's +1 entries
+        into = a[P:P + k].maximum(0)
+        pick = coo_matrix((np.ones(sum(map(len, groups))), (np.repeat(np.arange(len(groups)), [len(g) for g in groups]),
+                                                            np.concatenate(groups))), shape=(len(groups), k)).tocsr()
+        bounds_ub = {"A_ub": -(pick @ into), "b_ub": -np.ones(len(groups))}
+    got = linprog(np.concatenate(costs), A_eq=a, b_eq=b, bounds=(0, None), method="highs", options=options,
+                  **bounds_ub)
     if got.status != 0:  # not solved (in time): no bound from the program
         return None
     return int(np.ceil(got.fun / m - 1e-6))

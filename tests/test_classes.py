@@ -183,7 +183,7 @@ BRIDGE = make("""
 
 
 def test_pinned_cells_raise_the_no_scaffold_bound_to_the_class_optimum():
-    from bille.solvers.bounds import Ground
+    from bille.solvers.ground import Ground
     from bille.solvers.classes import pinned
 
     both = BRIDGE.start.tiles | BRIDGE.goal_tiles

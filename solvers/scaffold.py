@@ -1,0 +1,105 @@
+"""A lower bound on the makespan that prices scaffold: the routing bound per scaffold scenario
+(a part of :mod:`.bounds`, "scaffold scenarios (LP)").
+
+The routing bound (:mod:`.routing`) lets robots walk anywhere, over empty cells too: a schedule
+can only do so on tiles it set down there first (rule 4), and each such tile costs a place (and a
+pick to take it away again, which the program's tile balance already asks). On maps whose
+platforms are joined by thin bridges, which cells may ever hold such a tile decides how much a
+schedule can shortcut; this part splits every schedule by that, and takes the least bound.
+
+**Setting.** ``A`` is the set of cells with a tile at the start or in the goal. A *corridor line*
+is a column holding one or two start tiles (and, separately, a row: see below). A schedule's
+*scenario* ``Z`` is the set of corridor columns in which some cell outside ``A`` holds a tile after
+some step. Its *ground* is ``A``, every cell of the columns that are not corridor columns, and every
+cell of the columns of ``Z``.
+
+**Theorem.** Let a valid schedule have scenario ``Z``. (i) At every step, every tile lies on its
+ground: a tile outside ``A`` in a corridor column puts that column in ``Z``. So (rule 4) every pose
+of the schedule has its feet on the ground, and every pick and place targets it (a pick's target
+holds a tile before it, a place's after). (ii) For every column ``j`` of ``Z`` some place targets a
+cell of column ``j`` outside ``A``: such a cell holds no tile at the start, so its tile was placed
+there. Hence the schedule's carries and walks are a solution of the routing program on that
+ground (:class:`.ground.Ground`; the routing proof holds for the schedules that keep to the
+ground given) with, for each ``j`` of ``Z``, the row "places on the cells of column ``j`` outside
+``A`` >= 1": the program's value bounds the schedule's makespan.
+
+**Families.** For corridor columns ``Z_in`` (in the scenario) and ``U`` (not decided), every scenario
+``Z`` with ``Z_in <= Z <= Z_in | U`` has a ground inside the ground of ``Z_in | U`` and the rows of
+``Z_in`` among its own, so the program on the ground of ``Z_in | U`` with the rows of ``Z_in`` is a
+relaxation of each of theirs: its value is a lower bound for every schedule whose scenario is in
+the family. The search splits the family of least value on its next undecided column (in, out)
+until that family is one scenario: a family's value is at least its parent's (its scenarios are
+among the parent's), the families not split cover every scenario, so at any moment the least
+value among them is a lower bound on every schedule; when the budget runs out, that is the part.
+A family whose program is not solved (no time left, too many cells, or an infeasible program,
+which is not used as a proof here) keeps its parent's value.
+
+Rows instead of columns give a bound by the same proof (for maps whose bridges run north-south);
+the part is the larger of the two. On the paper's maps the least family is the one with scaffold
+in every corridor column, and the rows of its places raise the routing bound by one to three
+(docs/anytime.md). Checked against the brute-force search on tiny instances, through the bounds'
+soundness tests, and on tiny bridge maps (tests/test_classes.py).
+"""
+from __future__ import annotations
+
+import heapq
+
+import numpy as np
+
+from bille.instances import Instance
+from bille.instances.run import Budget
+
+from .ground import Ground
+from .routing import routing_bound
+
+SECONDS = 10.0  # at most, of the static bound's time: 2-8 s on lt-1..lt-5 (lt-8 needs 18 s)
+
+
+def scaffold_bound(instance: Instance, budget: Budget | None = None, floor: int = 0) -> int | None:
+    """The part of the module docstring (the larger of columns and rows), within ``budget`` (at
+    most :data:`SECONDS`); None where no line is a corridor line, no program is solved, or it
+    cannot exceed ``floor`` (the other parts' best): the scenario with scaffold in every corridor
+    line, whose value the part never exceeds, is tried first."""
+    budget = (budget or Budget()).child(SECONDS)
+    start, goal = instance.start.tiles, instance.goal_tiles
+    cells = np.arange(instance.width * instance.height)
+    found = []
+    for line, count in ((cells % instance.width, instance.width), (cells // instance.width, instance.height)):
+        starts = np.bincount(line[start], minlength=count)
+        corridor = [j for j in range(count) if 1 <= starts[j] <= 2]
+        if corridor:
+            found.append(_search(instance, line, corridor, start | goal, budget, floor))
+    found = [v for v in found if v is not None]
+    return max(found) if found else None
+
+
+def _search(instance: Instance, line: np.ndarray, corridor: list[int], both: np.ndarray,
+            budget: Budget, floor: int) -> int | None:
+    """Best-first search over the families of scenarios of these corridor lines; None at once
+    if the scenario with every line cannot exceed ``floor``."""
+    open_lines = ~np.isin(line, corridor)
+
+    def value(inside: tuple, allowed: tuple) -> int | None:
+        if budget.expired():
+            return None
+        ground = both | open_lines | np.isin(line, allowed)
+        groups = [np.flatnonzero((line == j) & ~both) for j in inside]
+        return routing_bound(instance, Ground(feet=ground, picks=ground, places=ground), budget, places=groups)
+
+    every = value(tuple(corridor), tuple(corridor))
+    if every is None or every <= floor:
+        return None
+    root = value((), tuple(corridor))
+    if root is None:
+        return None
+    heap = [(root, (), tuple(corridor))]
+    while not budget.expired():
+        lower, inside, undecided = heap[0]
+        if not undecided:
+            break  # a single scenario has the least value: nothing lower can be proved
+        heapq.heappop(heap)
+        j, rest = undecided[0], undecided[1:]
+        for child in (inside + (j,), inside):
+            got = value(child, child + rest)
+            heapq.heappush(heap, (lower if got is None else max(lower, got), child, rest))
+    return heap[0][0]
