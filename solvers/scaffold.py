@@ -61,38 +61,57 @@ def scaffold_bound(instance: Instance, budget: Budget | None = None, floor: int 
     cannot exceed ``floor`` (the other parts' best): the scenario with scaffold in every corridor
     line, whose value the part never exceeds, is tried first."""
     budget = (budget or Budget()).child(SECONDS)
-    start, goal = instance.start.tiles, instance.goal_tiles
-    cells = np.arange(instance.width * instance.height)
-    found = []
-    for line, count in ((cells % instance.width, instance.width), (cells // instance.width, instance.height)):
-        starts = np.bincount(line[start], minlength=count)
-        corridor = [j for j in range(count) if 1 <= starts[j] <= 2]
-        if corridor:
-            found.append(_search(instance, line, corridor, start | goal, budget, floor))
+    found = [_search(instance, line, corridor, budget, floor) for line, corridor in corridor_lines(instance)]
     found = [v for v in found if v is not None]
     return max(found) if found else None
 
 
-def _search(instance: Instance, line: np.ndarray, corridor: list[int], both: np.ndarray,
-            budget: Budget, floor: int) -> int | None:
+def corridor_lines(instance: Instance) -> list[tuple[np.ndarray, tuple[int, ...]]]:
+    """For columns, then rows: the line of every cell and the corridor lines (one or two start
+    tiles), where there are any."""
+    start = instance.start.tiles
+    cells = np.arange(instance.width * instance.height)
+    out = []
+    for line, count in ((cells % instance.width, instance.width), (cells // instance.width, instance.height)):
+        starts = np.bincount(line[start], minlength=count)
+        corridor = tuple(j for j in range(count) if 1 <= starts[j] <= 2)
+        if corridor:
+            out.append((line, corridor))
+    return out
+
+
+def scenario_value(instance: Instance, line: np.ndarray, corridor: tuple, inside: tuple, allowed: tuple,
+                   budget: Budget | None = None) -> int | None:
+    """The program of the family of scenarios ``inside <= Z <= allowed`` (module docstring):
+    the routing bound on the ground of ``allowed`` with a place forced in each line of
+    ``inside``; None where it is not solved."""
+    both = instance.start.tiles | instance.goal_tiles
+    ground = both | ~np.isin(line, corridor) | np.isin(line, allowed)
+    groups = [np.flatnonzero((line == j) & ~both) for j in inside]
+    return routing_bound(instance, Ground(feet=ground, picks=ground, places=ground), budget, places=groups)
+
+
+def scenario_of(instance: Instance, line: np.ndarray, corridor: tuple, tiles) -> tuple:
+    """A schedule's scenario: the corridor lines in which a cell outside start and goal holds a
+    tile after some step (``tiles``: the tiles after each step)."""
+    both = instance.start.tiles | instance.goal_tiles
+    ever = np.logical_or.reduce([t & ~both for t in tiles])
+    return tuple(j for j in corridor if ever[line == j].any())
+
+
+def _search(instance: Instance, line: np.ndarray, corridor: tuple, budget: Budget, floor: int) -> int | None:
     """Best-first search over the families of scenarios of these corridor lines; None at once
     if the scenario with every line cannot exceed ``floor``."""
-    open_lines = ~np.isin(line, corridor)
-
     def value(inside: tuple, allowed: tuple) -> int | None:
-        if budget.expired():
-            return None
-        ground = both | open_lines | np.isin(line, allowed)
-        groups = [np.flatnonzero((line == j) & ~both) for j in inside]
-        return routing_bound(instance, Ground(feet=ground, picks=ground, places=ground), budget, places=groups)
+        return None if budget.expired() else scenario_value(instance, line, corridor, inside, allowed, budget)
 
-    every = value(tuple(corridor), tuple(corridor))
+    every = value(corridor, corridor)
     if every is None or every <= floor:
         return None
-    root = value((), tuple(corridor))
+    root = value((), corridor)
     if root is None:
         return None
-    heap = [(root, (), tuple(corridor))]
+    heap = [(root, (), corridor)]
     while not budget.expired():
         lower, inside, undecided = heap[0]
         if not undecided:

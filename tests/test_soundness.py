@@ -14,7 +14,7 @@ import functools
 
 import pytest
 
-from bille.solvers import schedule_from_text, solve, validate
+from bille.solvers import bind, schedule_from_text, solve, validate
 from bille.solvers.bfs import Options as BfsOptions
 from bille.solvers.bfs import plan as bfs
 from bille.solvers.bounds import lower_bound
@@ -240,3 +240,34 @@ def test_tiles_to_move_and_no_robot_is_proved_impossible():
     inst = make("TTT\nT..", [], goal="TTT\n..T")
     assert "no robot" in lower_bound(inst).impossible[0]
     assert solve(inst, "cpsat").status == "infeasible"
+
+
+@pytest.mark.slow
+def test_every_schedule_keeps_to_its_own_scaffold_scenario():
+    # the theorem behind the scaffold scenarios, scenario by scenario: the program of a
+    # schedule's own scenario (its lines' places forced, its ground only) is at most its makespan
+    from bille.solvers.classes import tiles_over_time
+    from bille.solvers.scaffold import corridor_lines, scenario_of, scenario_value
+    from tinyworlds import bridge_instance
+
+    from bille.instances import load_instance
+    from bille.instances.bundled import bundled_path
+    from bille.solvers import load_schedule
+
+    found = []  # (instance, a valid schedule)
+    for inst in [inst for inst in QUICK + [bridge_instance(s) for s in range(20)] if inst is not None]:
+        ref = reference(inst)
+        if ref.status == "optimal" and inst.is_reconfiguration:
+            found.append((inst, ref.schedule))
+    for name in ("lt-1", "lt-4", "bridge-2"):
+        found.append((load_instance(bundled_path(name)), load_schedule(bundled_path(f"{name}.schedule"))))
+    seen = set()
+    for inst, schedule in found:
+        ids = bind(inst, schedule)
+        tiles = tiles_over_time(inst, ids)
+        for line, corridor in corridor_lines(inst):
+            mine = scenario_of(inst, line, corridor, tiles)
+            value = scenario_value(inst, line, corridor, mine, mine)
+            assert value is None or value <= ids.shape[1], (inst.name, mine, value, ids.shape[1])
+            seen.add(bool(mine))
+    assert seen == {True, False}  # schedules with scaffold and without
