@@ -214,3 +214,11 @@ def test_a_restricted_exact_search_starts_at_its_class_bound_and_finds_the_class
         assert ref.status != "optimal" or result.lower_bound <= ref.lower_bound
         compared += 1
     assert compared >= 6
+
+
+def test_a_restricted_search_on_a_fixed_structure_or_below_its_class_bound():
+    inst = load_instance(bundled_path("point-4"))  # no tile moves: every schedule keeps the structure
+    assert solve(inst, "cpsat", keep_structure=True, time_limit=30).status == "optimal"
+    capped = solve(BRIDGE, "cpsat", keep_structure=True, max_makespan=10, time_limit=30)
+    assert capped.status == "unsolved" and capped.stats["restricted_lower_bound"] == 13
+    assert "its class needs 13" in capped.stats["failure"] and capped.lower_bound <= 13

@@ -168,6 +168,10 @@ def makespan_search(job: Job, instance: Instance, run: Run | None, max_makespan:
     if within is not None and within.empty:  # a proof for the restriction only: not "infeasible"
         search.stats["failure"] = f"no {RESTRICTIONS[job.restriction][1]} exists: {'; '.join(within.why)}"
         return search.result("unsolved")
+    if cap < start:  # the class's bound is already above the cap
+        search.stats["failure"] = (f"no {RESTRICTIONS[job.restriction][1]} with a makespan up to the horizon cap "
+                                   f"{cap}: its class needs {start}")
+        return search.result("unsolved", lower=start)
     if goal_violation(instance.world, instance.start_state, instance.goal_tiles, instance.goal_cells, 0) is None:
         search.stats["tiles_traveled_optimal"] = True
         return search.result("optimal", np.zeros((instance.num_robots, 0), dtype=np.int64), lower=0)
@@ -185,10 +189,10 @@ def _class_bound(job: Job, instance: Instance, bounds: Bounds, budget: Budget):
     ``keep_structure`` and ``single_carry`` are the classes ``keep-structure`` and ``single-carry``),
     where its horizons start: every horizon below it has no schedule of the class. None for an
     unrestricted search or where the static bound proves the instance infeasible."""
-    if job.restriction is None or bounds.impossible:
-        return None
-    from bille.solvers.classes import class_bounds
+    from bille.solvers.classes import applies, class_bounds
 
+    if job.restriction is None or bounds.impossible or not applies(instance):
+        return None
     return class_bounds(instance, budget=budget, unconditional=bounds.lower)[job.restriction.replace("_", "-")]
 
 
