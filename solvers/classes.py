@@ -84,7 +84,7 @@ def pinned(instance: Instance, cells: np.ndarray) -> np.ndarray:
     for c in np.flatnonzero(articulation_points(cells, w, h)):
         rest = cells.copy()
         rest[c] = False
-        labels, count = components(rest, w, h)
+        labels, _ = components(rest, w, h)
         out[c] = np.bincount(labels)[1:].max(initial=0) < least
     return out
 
