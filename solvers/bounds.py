@@ -95,7 +95,7 @@ from .routing import routing_bound
 from .scaffold import scaffold_bound
 
 
-def SCAFFOLD_SHARE(budget: Budget | None) -> Budget | None:
+def _scaffold_budget(budget: Budget | None) -> Budget | None:
     """The scaffold scenarios' time: a quarter of what is left of ``budget`` (at most
     :data:`.scaffold.SECONDS`)."""
     return None if budget is None else budget.share(0.25)
@@ -158,7 +158,7 @@ def lower_bound(instance: Instance, *, budget: Budget | None = None, ground: Gro
             parts["routing (LP)"] = routing_bound(instance, ground, budget)
             if ground is EVERYWHERE:  # within a class's ground, scaffold is already priced or ruled out
                 best = max([v for v in parts.values() if v is not None] + [0])
-                parts["scaffold scenarios (LP)"] = scaffold_bound(instance, SCAFFOLD_SHARE(budget), floor=best)
+                parts["scaffold scenarios (LP)"] = scaffold_bound(instance, _scaffold_budget(budget), floor=best)
     lower = max([v for v in parts.values() if v is not None] + [0])
     return Bounds(lower, parts, impossible)
 
