@@ -89,23 +89,24 @@ def solve(instance: Instance, method: str = "auto", progress=None, *, bound: boo
             if tell is not None and not callable(tell):
                 raise OptionError(f"{method}: {name} must be a function, got {tell!r}")
         budget = whole.child(limit)
-        result, bounds, classes, bound_s = _run(instance, record, parsed, budget,
-                                                Events(on_schedule, on_bound, progress), bound)
+        result, bounds, bound_s = _run(instance, record, parsed, budget, Events(on_schedule, on_bound, progress),
+                                       bound)
     if budget.cancelled and result.status in ("feasible", "timeout", "unsolved"):
         result = _dataclasses.replace(result, status="interrupted")
-    return _checked(instance, method, result, bounds, bound_s, budget.elapsed(), _raised(classes, result))
+    return _checked(instance, method, result, bounds, bound_s, budget.elapsed(),
+                    _raised(None if bounds is None else bounds.classes, result))
 
 
 def _run(instance: Instance, record, options, budget: Budget, told: Events, bound: bool):
-    """The method's result, the static bound and the class bounds (or None) and the seconds they
+    """The method's result, the static bound with the class bounds (or None) and the seconds they
     took: the body of :func:`solve` under its Ctrl-C handler."""
-    method, bounds, classes, bound_s, progress = record.name, None, None, None, told.on_progress
+    method, bounds, bound_s, progress = record.name, None, None, told.on_progress
     kept = _Kept()  # what the method tells is kept here too, in case a KeyboardInterrupt ends it
     events = Events(_both(kept.schedule, told.on_schedule), _both(kept.bound, told.on_bound), progress)
     internal = {}
     try:
         if record.bound:  # the method searches from the bound: first, and it gets the time left
-            bounds, classes, bound_s = _static_bound(instance, budget, progress)
+            bounds, bound_s = _static_bound(instance, budget, progress)
             internal["bounds"] = bounds
         before = "computing the lower bound" if record.bound else "before the method ran"
         if budget.cancelled:
@@ -118,10 +119,10 @@ def _run(instance: Instance, record, options, budget: Budget, told: Events, boun
         result = kept.result(instance, method)
     if bound and bounds is None and result.status != "interrupted" and not budget.cancelled:
         try:  # after the method, in the time left
-            bounds, classes, bound_s = _static_bound(instance, budget, progress)
+            bounds, bound_s = _static_bound(instance, budget, progress)
         except KeyboardInterrupt:
             result = _dataclasses.replace(result, status="interrupted")
-    return result, bounds, classes, bound_s
+    return result, bounds, bound_s
 
 
 class _Kept:
@@ -152,10 +153,10 @@ def _both(first, second):
 
 
 def _static_bound(instance: Instance, budget: Budget, progress):
-    """The static bound, its slow part left out once ``budget`` expires, the class bounds
-    (:mod:`.classes`; None on a fixed structure, where the bound proves the instance
-    infeasible, or when the time is up), and the seconds they took; ``progress`` is told the
-    static bound (with the seconds since the run began)."""
+    """The static bound, its slow part left out once ``budget`` expires, with the class bounds in
+    its ``classes`` (:mod:`.classes`; None on a fixed structure, where the bound proves the
+    instance infeasible, or when the time is up), and the seconds they took; ``progress`` is
+    told the static bound (with the seconds since the run began)."""
     from .bounds import lower_bound
     from .classes import applies, class_bounds
 
@@ -163,27 +164,22 @@ def _static_bound(instance: Instance, budget: Budget, progress):
     bounds = lower_bound(instance, budget=budget)
     if progress is not None:
         progress({"lower": bounds.lower, "best": None, "elapsed": budget.elapsed()})
-    classes = None
     if applies(instance) and not bounds.impossible and not budget.expired():
-        classes = class_bounds(instance, budget=budget, unconditional=bounds.lower)
-    return bounds, classes, budget.now() - began
-
-
-# the exact methods' restrictions (their proofs hold within them) by the class they are
-_RESTRICTED = {"keep_structure": "keep-structure", "single_carry": "single-carry"}
+        bounds.classes = class_bounds(instance, budget=budget, unconditional=bounds.lower)
+    return bounds, budget.now() - began
 
 
 def _raised(classes: dict | None, result: Result) -> dict | None:
     """The class bounds raised by what the method proved: its bound for every schedule, and a
     restricted exact search's bound within its class. None after a proof that no schedule
     exists."""
-    from .classes import ClassBound, nested
+    from .classes import RESTRICTIONS, ClassBound, nested
 
     if classes is None or result.status == "infeasible":
         return None
     out = {key: c if c.empty else ClassBound(key, max(c.lower, result.lower_bound or 0)) for key, c in classes.items()}
     restricted = result.stats.get("restricted_lower_bound")
-    for flag, key in _RESTRICTED.items():
+    for flag, key in RESTRICTIONS.items():
         if result.stats.get(flag) and restricted is not None and not out[key].empty:
             out[key] = ClassBound(key, max(out[key].lower, restricted))
     return nested(out)

@@ -103,11 +103,14 @@ def _scaffold_budget(budget: Budget | None) -> Budget | None:
 
 @dataclass
 class Bounds:
-    """Lower bound on the makespan, its parts, and reasons why no schedule exists (if any)."""
+    """Lower bound on the makespan, its parts, and reasons why no schedule exists (if any);
+    ``classes``: the bounds of the classes of schedules (:func:`.classes.class_bounds`) where
+    ``solve()`` computed them with this bound."""
 
     lower: int
     parts: dict
     impossible: list[str]
+    classes: dict | None = None
 
 
 def lower_bound(instance: Instance, *, budget: Budget | None = None, ground: Ground = EVERYWHERE) -> Bounds:

@@ -188,12 +188,14 @@ def _class_bound(job: Job, instance: Instance, bounds: Bounds, budget: Budget):
     """For a restricted search, the bound of its class of schedules (:mod:`bille.solvers.classes`:
     ``keep_structure`` and ``single_carry`` are the classes ``keep-structure`` and ``single-carry``),
     where its horizons start: every horizon below it has no schedule of the class. None for an
-    unrestricted search or where the static bound proves the instance infeasible."""
-    from bille.solvers.classes import applies, class_bounds
+    unrestricted search or where the static bound proves the instance infeasible. The class
+    bounds ``solve()`` computed with the static bound are used, else computed here."""
+    from bille.solvers.classes import RESTRICTIONS, applies, class_bounds
 
     if job.restriction is None or bounds.impossible or not applies(instance):
         return None
-    return class_bounds(instance, budget=budget, unconditional=bounds.lower)[job.restriction.replace("_", "-")]
+    classes = bounds.classes or class_bounds(instance, budget=budget, unconditional=bounds.lower)
+    return classes[RESTRICTIONS[job.restriction]]
 
 
 def _find_incumbent(search: Search, given: Schedule | None, cap_given: bool) -> bool:
