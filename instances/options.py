@@ -33,11 +33,10 @@ from .errors import OptionError
 
 
 def option(default: Any, *, at_least: float | None = None, above: float | None = None,
-           choices: tuple | None = None, help: str = "") -> Any:
+           choices: tuple | None = None) -> Any:
     """A field of a :class:`MethodOptions`: its default, and its range (``at_least``, strictly
     ``above``, or one of ``choices``)."""
-    return dataclasses.field(default=default, metadata={"at_least": at_least, "above": above, "choices": choices,
-                                                        "help": help})
+    return dataclasses.field(default=default, metadata={"at_least": at_least, "above": above, "choices": choices})
 
 
 @dataclasses.dataclass(frozen=True)
@@ -79,7 +78,6 @@ class MethodOptions:
                 else str(f.default)
             out.append((f.name, kind, default + _describe_range(f.metadata)))
         return out
-
 
 
 def check_value(method: str, name: str, value: Any, hint, meta) -> None:

@@ -165,9 +165,10 @@ def _solve(k, m, balance, carry, walk, ends, robot_rows, budget: Budget | None, 
     bounds_ub = {}
     if groups:  # arcs into a place node: its conservation row's +1 entries
         into = a[P:P + k].maximum(0)
-        pick = coo_matrix((np.ones(sum(map(len, groups))), (np.repeat(np.arange(len(groups)), [len(g) for g in groups]),
-                                                            np.concatenate(groups))), shape=(len(groups), k)).tocsr()
-        bounds_ub = {"A_ub": -(pick @ into), "b_ub": -np.ones(len(groups))}
+        sizes = [len(g) for g in groups]
+        member = coo_matrix((np.ones(sum(sizes)), (np.repeat(np.arange(len(groups)), sizes), np.concatenate(groups))),
+                            shape=(len(groups), k)).tocsr()  # [group, cell]: the cell is in the group
+        bounds_ub = {"A_ub": -(member @ into), "b_ub": -np.ones(len(groups))}
     got = linprog(np.concatenate(costs), A_eq=a, b_eq=b, bounds=(0, None), method="highs", options=options,
                   **bounds_ub)
     if got.status != 0:  # not solved (in time): no bound from the program

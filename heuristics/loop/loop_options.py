@@ -15,7 +15,7 @@ class LoopOptions(MethodOptions):
     times the summed Manhattan carries plus ``W + H`` per job, at least 200); ``active``: the
     robots that take jobs (default: all; the others only keep out of the way). For path
     planning ``max_steps`` is Temporal A*'s step bound, the others are not used, and ``active``
-is refused (:meth:`loop_only`)."""
+    is refused (:meth:`loop_only`)."""
 
     load_transfer: bool = option(False)
     d_tr: int = option(5, at_least=0)
