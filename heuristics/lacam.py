@@ -140,7 +140,8 @@ class PoseSpace:
         problem = self.problem
         self.goal_poses = [int(w.goal_poses(c)[0]) for w, c in zip(problem.walks, problem.goals)]
         self.generator.prefer = scatter(self.generator.nbrs, problem.dist_lists, list(problem.start),
-                                        self.goal_poses, margin=SCATTER_MARGIN, budget=budget, seed=seed)
+                                        self.goal_poses, margin=SCATTER_MARGIN, budget=budget, seed=seed,
+                                        arrays=problem.dists)
         self.refining = None
 
     def refine(self, configs: list[Poses] | None, rng: random.Random, budget: Budget) -> list[Poses] | None:

@@ -237,7 +237,7 @@ def _suo(inst, margin=10):
             path.append(nxt[i][path[-1]])
         assert len(path) - 1 <= problem.dist_lists[i][s] + margin
         paths.append(path)
-    table = CollisionTable(len(nbrs))
+    table = CollisionTable(nbrs)
     for i, p in enumerate(paths):
         table.enroll(i, p)
     return problem, paths, table.count
@@ -254,6 +254,29 @@ def test_suo_paths_walk_to_the_goal_within_the_margin_and_avoid_each_other():
     alone = make("TTTT\nTTTT", [{"at": [0, 0]}], moveset="point", robot_goals=[[3, 1]], collisions="classic")
     _, (path,), _ = _suo(alone)
     assert len(path) - 1 == 4  # one robot: a shortest path
+
+
+@pytest.mark.parametrize("agents, seed", [(60, 0), (150, 3)])
+def test_the_compiled_suo_table_gives_the_python_tables_paths(agents, seed):
+    # the same algorithm twice (heuristics/scatter_compiled.py compiles it): the same paths, on a
+    # benchmark map crowded enough that the rounds move many robots off their shortest paths
+    from bille.heuristics.joint import JointProblem
+    from bille.heuristics.pibt import Classic
+    from bille.heuristics.scatter import scatter
+    from bille.instances.generators.movingai import from_movingai
+    from bille.tools.bench.mapf import shipped_maps
+
+    folder = shipped_maps()
+    inst = from_movingai(folder / "room-32-32-4.map", folder / "room-32-32-4-random-1.scen", agents=agents)
+    problem = JointProblem.of(inst, "lacam")
+    nbrs = Classic(problem, Random(0)).nbrs
+    goals = [int(w.goal_poses(c)[0]) for w, c in zip(problem.walks, problem.goals)]
+    runs = {compiled: scatter(nbrs, problem.dist_lists, list(problem.start), goals, seed=seed, compiled=compiled,
+                              arrays=problem.dists if compiled else None)
+            for compiled in (False, True)}
+    assert runs[True] == runs[False]
+    assert sum(len(nxt) for nxt in runs[True]) > 0
+    assert sum(len(nxt) - problem.dist_lists[i][s] for i, (nxt, s) in enumerate(zip(runs[True], problem.start))) > 0
 
 
 def test_suo_makes_lacam_spread_robots_on_a_benchmark_map():

@@ -65,13 +65,16 @@ def mapf_rows(folder: Path, maps=MAPS, agents=AGENTS, time_limit: float = 60.0, 
     """Yield one result row per map and agent count, as soon as it is measured; with ``peers``
     (:func:`.peers.available`), each peer's row under ``row["peers"][name]``, run right after
     bille's on the same agents (interleaved, so that a loaded machine weighs on both alike), and
-    bille warmed up first on two agents (its lazily imported modules loaded, as the peers' own
-    times leave out their start)."""
+    bille warmed up first on two agents (its lazily imported modules and its compiled SUO table
+    loaded, as the peers' own times leave out their start)."""
     from .peers import run_lacam3, run_pypibt
 
     if peers and maps:  # the peers' times leave out their start: bille's leave out its imports
+        from bille.heuristics.scatter_compiled import warm_up
+
         warm = from_movingai(folder / f"{maps[0]}.map", folder / f"{maps[0]}{SCENARIO}", agents=2)
         solve(warm, "lacam", objective="sum-of-loss", time_limit=time_limit, improve=0.0)
+        warm_up()
     for name in maps:
         map_file, scen = folder / f"{name}.map", folder / f"{name}{SCENARIO}"
         for k in agents:
