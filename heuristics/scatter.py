@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import heapq
 import random
+import sys
 
 from bille.instances.run import Budget
 
@@ -124,11 +125,12 @@ def scatter(nbrs: list[list[int]], dists: list, starts: list[int], goals: list[i
     robots on ``nbrs`` (the cells next to each cell) from ``starts`` to ``goals``, ``dists[i]``
     robot ``i``'s distances to its goal (lists; ``arrays``: the same as numpy arrays, if at hand,
     for the compiled table). Stops when ``budget`` expires with the paths of the last whole round
-    (or none). ``compiled``: which table (None: by size, :data:`COMPILED_FROM`)."""
+    (or none). ``compiled``: which table (None: the compiled one from :data:`COMPILED_FROM`, or
+    once it is loaded in this process)."""
     rng = random.Random(seed)
     m = len(starts)
     if compiled is None:
-        compiled = m * len(nbrs) >= COMPILED_FROM
+        compiled = m * len(nbrs) >= COMPILED_FROM or _loaded()
     if compiled:
         from .scatter_compiled import CompiledTable
         table = CompiledTable(nbrs)
@@ -161,6 +163,12 @@ def scatter(nbrs: list[list[int]], dists: list, starts: list[int], goals: list[i
         if table.count == 0:
             break
     return _successors(kept, table)
+
+
+def _loaded() -> bool:
+    """Whether this process has the compiled table loaded already (it costs nothing more then)."""
+    module = sys.modules.get(f"{__package__}.scatter_compiled")
+    return bool(module is not None and module.loaded)
 
 
 def _successors(paths, table) -> list[dict[int, int]]:

@@ -5,8 +5,8 @@ about six times faster once loaded.
 Loading it costs about a second in a new process (importing Numba, then its cached machine code;
 the very first run on a machine compiles it, a few seconds more, and caches it beside this file
 or in Numba's user cache), so :func:`.scatter.scatter` uses it only where the pure-Python table
-would take longer (:data:`.scatter.COMPILED_FROM`). :func:`warm_up` loads it ahead of a
-measurement.
+would take longer (:data:`.scatter.COMPILED_FROM`), or once it is loaded. :func:`warm_up` loads
+it ahead of a measurement.
 
 The table is flat arrays: ``at[t * P + v]`` robots at cell ``v`` at step ``t``; ``moved`` a
 Numba dictionary from ``(t * P + u) * P + v`` to the robots moving ``u -> v`` in step ``t -> t +
@@ -21,6 +21,7 @@ from numba import njit, types
 from numba.typed import Dict
 
 NEVER = 1 << 30  # no path ends on the cell
+loaded = False  # whether a search has run in this process (the kernels are loaded)
 
 
 @njit(cache=True)
@@ -187,6 +188,8 @@ class CompiledTable:
             self.dists[i] = np.asarray(dist, dtype=np.int64)
         found = _search(self.nbr, self.dists[i], start, goal, bound, self.at, self.moved,
                         self.end, self.size, self.closed, self.parent, self.stamp)
+        global loaded
+        loaded = True
         return found if len(found) else None
 
     @staticmethod

@@ -20,6 +20,9 @@ def test_the_default_maps_ship_with_their_scenarios_and_source():
     assert set(MAPS) <= set(map_names(folder))
     readme = (folder / "README.md").read_text()
     assert "movingai.com" in readme and "Licence" in readme
+    for name in MAPS:  # every shipped scenario reads, its agents on passable cells of its map
+        inst = from_movingai(folder / f"{name}.map", folder / f"{name}{SCENARIO}", agents=20)
+        assert inst.num_robots == 20 and name in readme
 
 
 def test_bench_mapf_runs_on_the_shipped_maps(capsys):

@@ -259,9 +259,9 @@ def bench_crowd(size: int, robots: int, horizon: int, seed: int) -> int:
 @bench.command("mapf")
 @click.option("--maps", "folder", type=click.Path(file_okay=False, exists=True), default=None,
               help="Folder of MovingAI NAME.map files with their NAME-random-1.scen scenarios "
-                   "(default: the three maps shipped with bille).")
+                   "(default: the four maps shipped with bille).")
 @click.option("--names", default=None, help="Comma-separated map names in that folder (default: the shipped "
-              "random-32-32-10, room-32-32-4, warehouse-10-20-10-2-1, or every map of --maps).")
+              "random-32-32-10, room-32-32-4, warehouse-10-20-10-2-1, random-64-64-20, or every map of --maps).")
 @click.option("--agents", default="50,100,200,300,400", show_default=True, help="Comma-separated agent counts.")
 @click.option("--time-limit", type=click.FloatRange(min=0.1), default=60.0, show_default=True)
 @click.option("--improve", type=click.FloatRange(min=0), default=0.0, show_default=True,

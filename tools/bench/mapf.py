@@ -28,7 +28,7 @@ from ..common import solved
 from ..tables import text_table
 from .core import north_facing
 
-MAPS = ("random-32-32-10", "room-32-32-4", "warehouse-10-20-10-2-1")
+MAPS = ("random-32-32-10", "room-32-32-4", "warehouse-10-20-10-2-1", "random-64-64-20")
 AGENTS = (50, 100, 200, 300, 400)
 SCENARIO = "-random-1.scen"  # NAME.map is read with NAME-random-1.scen
 
