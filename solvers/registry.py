@@ -27,20 +27,11 @@ from bille.instances.run import Run
 
 
 def plan_temporal_astar(instance: Instance, options=None, run: Run | None = None) -> Result:
-    """Temporal A* (:func:`bille.heuristics.temporal_astar.plan`); on an instance that moves tiles,
-    the reconfiguration loop with Temporal A* as its motion layer."""
+    """Temporal A* (:func:`bille.heuristics.temporal_astar.plan`): the reconfiguration loop with
+    Temporal A* as its motion layer, on path planning with no jobs."""
     from bille.heuristics import temporal_astar
-    from bille.heuristics.loop import reconfigure
 
-    o = options or temporal_astar.Options()
-    if instance.is_reconfiguration:
-        if not o.shift_priorities:
-            raise OptionError("temporal-astar: shift_priorities=false is for path planning only")
-        return reconfigure.plan(instance, motion="temporal-astar", load_transfer=o.load_transfer, d_tr=o.d_tr,
-                                epsilon=o.epsilon, horizon=o.horizon, run=run, max_steps=o.max_steps,
-                                max_shifts=o.max_shifts, priorities=o.priorities, active=o.active)
-    o.loop_only()
-    return temporal_astar.plan(instance, o, run)
+    return temporal_astar.plan(instance, options, run)
 
 
 def plan_mstar(instance: Instance, options=None, run: Run | None = None) -> Result:

@@ -52,10 +52,14 @@ class Goal:
 class Goals:
     """Each robot's goal (module docstring); ``parking`` for the LaCAM* motion layer."""
 
-    def __init__(self, instance: Instance, manipulation: Manipulation, parking: bool = False) -> None:
+    def __init__(self, instance: Instance, manipulation: Manipulation, parking: bool = False,
+                 size: int = 512) -> None:
+        """``size``: goals kept (at least 512; one per robot at least, or the tables of robots
+        bound for their goal cells would be made again every step)."""
         self.instance, self.manipulation, self.parking = instance, manipulation, parking
+        self.cells = instance.goal_cells  # each robot's goal cell (-1: none)
         self._type = {int(i): k for k, (_, robots) in enumerate(instance.world.groups) for i in robots}
-        self._goals: LRU[Goal] = LRU(512)
+        self._goals: LRU[Goal] = LRU(max(512, size))
         self.evicted: dict[int, frozenset[int]] = {}  # idle robot -> cells it must leave
 
     def evict(self, s: LoopState) -> bool:
@@ -69,14 +73,14 @@ class Goals:
         needed: set[int] = set()
         for j in range(s.num_robots):
             goal = self.of(s, j)
-            if goal is not None and (s.legs[j] or self.instance.goal_cells[j] >= 0):
+            if goal is not None and (s.legs[j] or self.cells[j] >= 0):
                 walk = s.walk(j)
                 feet = walk.graph.feet[np.flatnonzero(goal.dist == 0)]
                 needed.update(int(c) for c in feet.ravel() if c >= 0)
                 needed.update(_downhill(walk, goal, s.poses[j]))
         found = False
         for i in range(s.num_robots):
-            if s.legs[i] or self.instance.goal_cells[i] >= 0 or i in self.evicted:
+            if s.legs[i] or self.cells[i] >= 0 or i in self.evicted:
                 continue
             if needed.intersection(s.cells_now(i)):
                 self.evicted[i] = frozenset(needed)
@@ -97,7 +101,7 @@ class Goals:
             if leg.kind == Kind.PICK and len(legs) > 1 and legs[1].kind == Kind.PLACE:
                 return self._pick_towards(s, i, walk, leg.cell, legs[1].cell)
             return self._goal(i, walk, ("facing", leg.cell), lambda: walk.facing_distances(leg.cell))
-        cell = self.instance.goal_cells[i]
+        cell = self.cells[i]
         if cell >= 0:
             return self._goal(i, walk, ("front", cell), lambda: walk.distances(cell))
         if self.parking:

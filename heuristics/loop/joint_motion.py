@@ -33,7 +33,7 @@ class _JointPlan:
     label = ""
     parking = drops = False
 
-    def start(self, instance: Instance, stats: dict) -> None:
+    def start(self, instance: Instance, stats: dict, shifts: int | None = None) -> None:
         self.instance, self.stats = instance, stats
         self.failure: str | None = None
         self._plan: list | None = None  # the joint actions still to follow
@@ -114,8 +114,8 @@ class LaCAM(_JointPlan):
     def __init__(self, max_nodes: int = LACAM_NODES, seed: int = 0) -> None:
         self.max_nodes, self.seed = max_nodes, seed
 
-    def start(self, instance: Instance, stats: dict) -> None:
-        super().start(instance, stats)
+    def start(self, instance: Instance, stats: dict, shifts: int | None = None) -> None:
+        super().start(instance, stats, shifts)
         self._priority = [0.0] * instance.num_robots  # the generator's priorities
         self._rng = random.Random(self.seed)
         self._zeros: dict[int, list[int]] = {}  # distance lists of robots without a goal

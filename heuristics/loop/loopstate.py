@@ -63,6 +63,13 @@ class LoopState:
         """What the loop compares to see it is going round in circles."""
         return self.state.key(), tuple(map(tuple, self.legs)), self.next_job, tuple(self.Q)
 
+    def shift_up(self, robot: int) -> None:
+        """Move ``robot`` up one place in the priority queue ``Q``."""
+        Q = self.Q
+        k = Q.index(robot)
+        if k > 0:
+            Q[k - 1], Q[k] = Q[k], Q[k - 1]
+
     def snapshot(self) -> "LoopState":
         """A copy to go back to."""
         return LoopState(self.world, self.state, [list(legs) for legs in self.legs], self.jobs, self.next_job,

@@ -10,6 +10,7 @@ while (a temporary placement).
 from __future__ import annotations
 
 from collections import Counter
+from functools import cached_property
 
 import numpy as np
 
@@ -29,7 +30,7 @@ class Manipulation:
     def __init__(self, instance: Instance, start: LoopState, stats: dict | None = None) -> None:
         self.width, self.height = instance.width, instance.height
         self.stats = Counter() if stats is None else stats
-        self._facing_feet = facing_feet(instance.world)
+        self.world = instance.world
         self.stands = True
         self.stands = self.executable(start.state.tiles, start.pending_ops())
         self._ready_key, self._ready = None, set()
@@ -49,6 +50,12 @@ class Manipulation:
     def _can_face(self, tiles: np.ndarray, cell: int) -> bool:
         """Whether some robot could stand on ``tiles`` facing ``cell`` to pick or place there."""
         return any(bool(tiles[feet].all(axis=1).any()) for feet in self._facing_feet.get(cell, ()))
+
+    @cached_property
+    def _facing_feet(self) -> dict:
+        """Per cell, the feet of the poses facing it (:func:`.legs.facing_feet`; made when first
+        needed: path planning never needs it)."""
+        return facing_feet(self.world)
 
     def allowed(self, tiles: np.ndarray, leg: Leg, rest: list[Op]) -> np.ndarray | None:
         """The tiles after ``leg`` if it may happen on ``tiles`` with ``rest`` still to run."""

@@ -6,7 +6,8 @@ towards their goals (:mod:`.goals`), within the loop's budget. Every layer has t
 
 - ``temporal-astar`` (:class:`TemporalAStar`, the paper's): windows of ``H`` steps planned in
   the order of ``Q`` (:func:`.spacetime.reservation_step`), the manipulating robots' cells
-  reserved first; a blocked robot moves up in ``Q``.
+  reserved first; a blocked robot moves up in ``Q``. On path planning this layer and the loop
+  are the method ``temporal-astar`` itself, with the paper's rules when stuck.
 - ``mstar`` and ``lacam`` (:mod:`.joint_motion`): a joint plan to the current goals, followed
   while the structure, the goals and the poses follow it.
 """
@@ -18,7 +19,6 @@ from bille.instances import Instance
 from bille.instances.run import Budget
 
 from ..spacetime import reservation_step
-from ..temporal_astar import shift_up
 from .goals import Goal
 from .joint_motion import LaCAM, MStar
 from .loopstate import LoopState
@@ -38,8 +38,10 @@ class Motion(Protocol):
     drops: bool
     failure: str | None  # why the last :meth:`step` found no joint action (``timeout``, ...)
 
-    def start(self, instance: Instance, stats: dict) -> None:
-        """Begin a run on ``instance``, counting into ``stats``."""
+    def start(self, instance: Instance, stats: dict, shifts: int | None = None) -> None:
+        """Begin a run on ``instance``, counting into ``stats``. ``shifts``: path planning, the
+        paper's rules: priority shifts allowed in the run (``stats["priority_shifts"]`` counts
+        them); None: the loop's own rules."""
 
     def step(self, s: LoopState, fixed: dict[int, int], goals: list[Goal | None],
              intents: dict[int, frozenset], budget: Budget) -> list[int] | None:
@@ -65,7 +67,9 @@ class TemporalAStar:
     of its manipulation are reserved from the second step on, so that the robot standing there
     must leave. A blocked robot moves up in ``Q`` (the paper's rule) and the step is planned
     again; if one is still blocked, every robot keeps off the lower robots' cells for the whole
-    window (*cautious*), and if even then, without the intents."""
+    window (*cautious*), and if even then, without the intents. With the paper's rules (path
+    planning), a blocked robot moves up and the step is planned again while the run's budget of
+    shifts lasts, and no further (``deadlock``)."""
 
     name, label, parking, drops = "temporal-astar", "Temporal A*", False, False
 
@@ -73,28 +77,51 @@ class TemporalAStar:
         self.horizon, self.epsilon = horizon, epsilon
         self.failure: str | None = None
 
-    def start(self, instance: Instance, stats: dict) -> None:
-        self.stats = stats
+    def start(self, instance: Instance, stats: dict, shifts: int | None = None) -> None:
+        self.stats, self.shifts = stats, shifts
 
     def step(self, s, fixed, goals, intents, budget):
         self.failure = None
+        # what the replans of this step share: the state does not change between them, Q does
+        walks: dict[int, object] = {}
+        here: dict[int, frozenset] = {}
+        self._walk = lambda i: walks[i] if i in walks else walks.setdefault(i, s.walk(i))
+        self._here = lambda i: here[i] if i in here else here.setdefault(i, s.cells_now(i))
         joint, blocked = self._window(s, fixed, goals, intents)
+        if self.shifts is not None:
+            return self._paper(s, fixed, goals, intents, budget, joint, blocked)
         for _ in range(len(s.Q)):
             if blocked is None:
                 break
             if budget.expired():  # between replans too
                 self.failure = "timeout"
                 return None
-            shift_up(s.Q, blocked)
-            self.stats["priority_shifts"] += 1
-            self.stats["replans"] += 1
-            joint, blocked = self._window(s, fixed, goals, intents)
+            joint, blocked = self._replan(s, blocked, fixed, goals, intents)
         if blocked is not None:
             self.stats["cautious_steps"] += 1
             joint, blocked = self._window(s, fixed, goals, intents, cautious=True)
             if blocked is not None:  # the intents cannot be made room for now
                 joint, _ = self._window(s, fixed, goals, {}, cautious=True)
         return joint
+
+    def _paper(self, s, fixed, goals, intents, budget, joint, blocked):
+        """The paper's rule for a blocked robot (class docstring)."""
+        while blocked is not None:
+            if self.stats["priority_shifts"] >= self.shifts:
+                self.failure = "deadlock"
+                return None
+            if budget.expired():  # many robots: many replans
+                self.failure = "timeout"
+                return None
+            joint, blocked = self._replan(s, blocked, fixed, goals, intents)
+        return joint
+
+    def _replan(self, s, blocked: int, fixed, goals, intents):
+        """The blocked robot moves up in ``Q``; the step is planned again."""
+        s.shift_up(blocked)
+        self.stats["priority_shifts"] += 1
+        self.stats["replans"] += 1
+        return self._window(s, fixed, goals, intents)
 
     def _window(self, s: LoopState, fixed: dict[int, int], goals: list[Goal | None],
                 intents: dict[int, frozenset], cautious: bool = False) -> tuple[list[int] | None, int | None]:
@@ -105,20 +132,20 @@ class TemporalAStar:
         reserved: list[set[int]] = [set() for _ in range(H + 1)]
         joint = [0] * len(poses)
         for i, a in fixed.items():
-            cells = s.walk(i).cells(poses[i], a)
+            cells = self._walk(i).cells(poses[i], a)
             for t in range(1, H + 1):
                 reserved[t] |= cells
             joint[i] = a
         for i, cells in intents.items():
-            here = s.cells_now(i)
+            here = self._here(i)
             reserved[1] |= here
             for t in range(2, H + 1):
                 reserved[t] |= here | cells
             joint[i] = s.world.graphs[i].wait
         order = [i for i in s.Q if i not in fixed and i not in intents]
-        walks = {i: s.walk(i) for i in order}
+        walks = {i: self._walk(i) for i in order}
         targets = {i: (None, None) if goals[i] is None else goals[i].lists for i in order}
-        first, blocked = reservation_step(order, walks, targets, poses, H, reserved, s.cells_now,
+        first, blocked = reservation_step(order, walks, targets, poses, H, reserved, self._here,
                                           self.epsilon, self.stats, cautious)
         if first is None:
             return None, blocked

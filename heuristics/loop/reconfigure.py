@@ -28,6 +28,17 @@ motion layer is told (LaCAM* then follows a joint plan out of the circle). After
 such shifts, the latest step that made load transfers is undone and its transfers are never
 made again (at most ``MAX_BACKTRACKS`` times).
 
+**Path planning** (an instance whose tiles stay: no jobs) is this loop with the paper's
+Temporal A* rules when the robots are stuck: in a circle, the lowest robot of ``Q`` not at its
+goal moves up one place; a blocked robot moves up and the step is planned again; every such
+shift counts against one budget (``max_shifts``), and when it is spent the run gives up
+(``deadlock``); with ``shift_priorities=False`` the first block or circle ends it. The loop's
+own ways out (cautious windows, evictions) are for making room for picks and places: measured
+on crowded path-planning instances, they give up more often than the paper's rules
+(docs/decisions.md). A robot that cannot reach its goal ends the run at once (``unreachable``),
+and the step bound defaults to four times the robots' summed distances to their goals, at
+least 100.
+
 The run ends when every job is done, no robot carries a tile and every robot with a goal cell
 stands on it. It gives up with status ``unsolved`` (reason in ``stats["failure"]``) when no
 sequence is found, at the step bound, when the motion layer finds no joint action, or when the
@@ -36,12 +47,14 @@ robots are going round in circles after spending the budget of priority shifts; 
 """
 from __future__ import annotations
 
+import numpy as np
+
 from bille.instances import Instance, OptionError
 from bille.instances.rules import State, apply
 from bille.instances.run import Budget, Run
+from bille.instances.walking import UNREACHABLE
 
-from ..joint import to_result
-from ..temporal_astar import shift_up, timing
+from ..joint import check_tables, to_result
 from .allocation import Allocation
 from .goals import Goals
 from .legs import Leg, Transfer
@@ -57,7 +70,7 @@ RESTORED = ("circle_shifts", "relays", "swaps")  # counts that a backtrack sets 
 def plan(instance: Instance, *, motion: str | Motion = "temporal-astar", load_transfer: bool = False,
          d_tr: int = 5, epsilon: float = 1.0, horizon: int = 5, run: Run | None = None,
          max_steps: int | None = None, max_shifts: int | None = None, priorities: list[int] | None = None,
-         active: list[int] | None = None, method: str | None = None):
+         active: list[int] | None = None, method: str | None = None, shift_priorities: bool = True):
     """Run the reconfiguration loop (module docstring); returns a
     :class:`~bille.instances.result.Result` named ``method`` (default: the motion layer's name).
 
@@ -69,14 +82,15 @@ def plan(instance: Instance, *, motion: str | Motion = "temporal-astar", load_tr
     ``max_shifts``: priority shifts allowed when going round in circles (default ``4 m^2 + 4
     jobs``); ``active``: the robots that take jobs (default: all); the others only keep out of
     the way, and one that carries a tile at the start still delivers it; ``run``: the run
-    context (when its budget expires, status ``timeout``; default: no limit).
+    context (when its budget expires, status ``timeout``; default: no limit);
+    ``shift_priorities``: False keeps ``Q`` fixed (path planning only, for comparison).
     """
     name = motion if isinstance(motion, str) else motion.name
     budget = (run or Run()).budget
     try:
         loop = Loop(instance, motion=motion, load_transfer=load_transfer, d_tr=d_tr, epsilon=epsilon,
                     horizon=horizon, budget=budget, max_steps=max_steps, max_shifts=max_shifts,
-                    priorities=priorities, active=active)
+                    priorities=priorities, active=active, method=method, shift_priorities=shift_priorities)
     except NoSequence as exc:  # the loop gives up before its first step
         status = "timeout" if budget.expired() else "unsolved"
         return to_result(instance, method or name, status, None, stats={"failure": str(exc)})
@@ -100,9 +114,10 @@ class Loop:
     def __init__(self, instance: Instance, *, motion: str | Motion = "temporal-astar", load_transfer: bool = False,
                  d_tr: int = 5, epsilon: float = 1.0, horizon: int = 5, budget: Budget | None = None,
                  max_steps: int | None = None, max_shifts: int | None = None,
-                 priorities: list[int] | None = None, active: list[int] | None = None) -> None:
+                 priorities: list[int] | None = None, active: list[int] | None = None,
+                 method: str | None = None, shift_priorities: bool = True) -> None:
         m = instance.num_robots
-        name = motion if isinstance(motion, str) else motion.name
+        name = method or (motion if isinstance(motion, str) else motion.name)
         if isinstance(motion, str) and motion not in MOTIONS:
             raise OptionError(f"unknown motion planner '{motion}' (expected one of: {', '.join(MOTIONS)})")
         if epsilon < 1:
@@ -114,12 +129,19 @@ class Loop:
         Q = list(range(m)) if priorities is None else list(priorities)
         if sorted(Q) != list(range(m)):
             raise OptionError(f"{name}: priorities must order the robot ids 0..{m - 1}, got {priorities}")
-        if m == 0:
-            raise OptionError(f"instance '{instance.name}' has no robots to move its tiles")
         active = _active(active, m, name)
         self.instance = instance
         self.budget = budget or Budget()
-        self.s = LoopState.start(instance, sequence_of(instance, budget=self.budget), Q)
+        self.path_planning = not instance.is_reconfiguration  # no jobs: the paper's rules when stuck
+        if self.path_planning:
+            check_tables(instance, name)
+        elif m == 0:
+            raise OptionError(f"instance '{instance.name}' has no robots to move its tiles")
+        elif not shift_priorities:
+            raise OptionError(f"{name}: shift_priorities=false is for path planning only")
+        self.shift_priorities = shift_priorities
+        jobs = [] if self.path_planning else sequence_of(instance, budget=self.budget)
+        self.s = LoopState.start(instance, jobs, Q)
         jobs = self.s.jobs
         w, h = instance.width, instance.height
         carries = sum(abs(j.place % w - j.pick % w) + abs(j.place // w - j.pick // w)
@@ -135,14 +157,24 @@ class Loop:
                             "goals_dropped": 0, "drops": 0, "evictions": 0,
                             "plan_ms_mean": 0.0, "plan_ms_max": 0.0}
         self.motion: Motion = MOTIONS[motion](epsilon=epsilon, horizon=horizon) if isinstance(motion, str) else motion
-        self.motion.start(instance, self.stats)
+        # the paper's rules: the motion layer's replans spend the same budget (none with Q fixed)
+        self.motion.start(instance, self.stats, (self.max_shifts if shift_priorities else 0) if self.path_planning else None)
         self.allocation = Allocation(active)
         self.transfer = LoadTransfer(instance, d_tr, self.stats) if load_transfer else None
         self.manipulation = Manipulation(instance, self.s, self.stats)
-        self.goals = Goals(instance, self.manipulation, parking=self.motion.parking)
+        self.goals = Goals(instance, self.manipulation, parking=self.motion.parking, size=2 * m)
+        if self.path_planning and max_steps is None:
+            far = self._distances()
+            self.max_steps = max(100, 4 * int(far[far < UNREACHABLE].sum()))
+
+    def _distances(self) -> np.ndarray:
+        """Each robot's steps to its goal from where it stands (0 without a goal cell); read from
+        the goals' plain lists, which the motion layer reads every step (made here, before it)."""
+        goals = self.goals.all(self.s)
+        return np.array([0 if g is None else g.lists[0][p] for g, p in zip(goals, self.s.poses)], dtype=np.int64)
 
     def done(self) -> bool:
-        return self.s.done(self.instance.goal_tiles, self.instance.goal_cells)
+        return self.s.done(self.instance.goal_tiles, self.goals.cells)
 
     def _transfers(self, seen: set) -> None:
         """Step 2: the load transfers of this step, applied, and the state before them kept."""
@@ -182,6 +214,11 @@ class Loop:
             timing(stats, step_times)
             return to_result(self.instance, method, status, None, stats=stats)
 
+        if self.path_planning:
+            unreachable = np.flatnonzero(self._distances() >= UNREACHABLE).tolist()
+            if unreachable:
+                stats["unreachable"] = unreachable
+                return stop("unreachable")
         while not self.done():
             s = self.s
             if len(s.steps) >= self.max_steps:
@@ -194,6 +231,13 @@ class Loop:
             if self.transfer is not None:
                 self._transfers(seen)
             key = s.key()
+            if key in seen and self.path_planning:  # going round in circles: the paper's rule
+                if not self.shift_priorities or stats["priority_shifts"] >= self.max_shifts:
+                    return stop("deadlock")
+                stuck = [i for i in s.Q if not self._at_goal(i)]
+                s.shift_up(stuck[-1])
+                stats["priority_shifts"] += 1
+                continue
             if key in seen:  # going round in circles
                 if stats["circle_shifts"] >= self.max_shifts:
                     if self.transfer is not None and self.transfer.can_backtrack():
@@ -207,7 +251,7 @@ class Loop:
                         continue
                     return stop("deadlock")
                 busy = [i for i in s.Q if s.legs[i] or self.goals.of(s, i) is not None] or list(s.Q)
-                shift_up(s.Q, busy[-1])
+                s.shift_up(busy[-1])
                 stats["priority_shifts"] += 1
                 stats["circle_shifts"] += 1
                 if motion.circle():
@@ -223,6 +267,9 @@ class Loop:
                     for i, a in fixed.items():
                         joint[i] = a
                     motion.forget()
+            if joint is None and self.path_planning:
+                step_times.append(self.budget.now() - t0)
+                return stop("time limit", "timeout") if motion.failure == "timeout" else stop(motion.failure)
             if joint is None:
                 return stop(f"{motion.label} found no joint plan ({motion.failure})",
                             status="timeout" if motion.failure == "timeout" else "unsolved")
@@ -238,6 +285,18 @@ class Loop:
         timing(stats, step_times)
         stats["final_priorities"] = list(self.s.Q)
         return to_result(self.instance, method, "feasible", self.s.steps, stats=stats)
+
+    def _at_goal(self, i: int) -> bool:
+        """Robot ``i`` stands on its goal cell, or has none."""
+        cell = self.goals.cells[i]
+        return cell < 0 or self.instance.world.graphs[i].feet[self.s.poses[i], 0] == cell
+
+
+def timing(stats: dict, step_times: list[float]) -> None:
+    """Mean and largest planning time per step, in ms, into ``stats``."""
+    if step_times:
+        stats["plan_ms_mean"] = round(1000 * float(np.mean(step_times)), 3)
+        stats["plan_ms_max"] = round(1000 * float(np.max(step_times)), 3)
 
 
 __all__ = ["Leg", "Loop", "LoopState", "MOTIONS", "Transfer", "plan"]
