@@ -153,3 +153,28 @@ def test_the_sum_of_costs_in_the_metrics_is_the_benchmarks_and_cbss():
     assert not any(c >= 0 for c in lt.goal_cells)
     shipped = validate(lt, load_schedule(str(bundled_path("lt-1")).replace(".yaml", ".schedule.yaml")))
     assert shipped.valid and "sum_of_costs" not in shipped.metrics.to_json()
+
+
+FAKE_LACAM3 = """#!{python}
+import sys
+args = dict(zip(sys.argv[1::2], sys.argv[2::2]))
+open(args["-o"], "w").write("solved=1\\ncomp_time=7\\ncomp_time_initial_solution=7\\nsolution=\\n0:(0,0),\\n")
+open({marker!r}, "w").write(args["-N"])
+"""
+
+
+def test_bench_mapf_runs_a_peer_named_by_its_path(capsys, tmp_path):
+    # --against lacam3 PATH runs that program on the same agents and checks what it returns with
+    # the validator: this stand-in answers with one robot at (0, 0), which the check refuses
+    import sys
+
+    fake, marker = tmp_path / "main", tmp_path / "ran"
+    fake.write_text(FAKE_LACAM3.format(python=sys.executable, marker=str(marker)))
+    fake.chmod(0o755)
+    code, out, err = run(capsys, "bench", "mapf", "--names", "room-32-32-4", "--agents", "3",
+                         "--against", "lacam3", str(fake))
+    assert code == 0 and marker.read_text() == "3", err
+    assert "lacam3 [s]" in out and "other agents" in out and "geometric mean" not in out
+    code, out, err = run(capsys, "bench", "mapf", "--names", "room-32-32-4", "--agents", "3",
+                         "--against", "pypibt", str(tmp_path))
+    assert code == 2 and out == "" and "not pypibt's repository folder" in err and "Traceback" not in err

@@ -269,20 +269,24 @@ def bench_crowd(size: int, robots: int, horizon: int, seed: int) -> int:
 @click.option("--peers", type=click.Path(file_okay=False, exists=True), default=None,
               help="Folder with lacam3 (lacam3/build/main) and pypibt (pypibt/pypibt) built from their own "
                    "repositories: print bille's time and sum of costs against theirs.")
+@click.option("--against", nargs=2, multiple=True, metavar="PEER PATH",
+              type=(click.Choice(["lacam3", "pypibt"]), click.Path(exists=True)),
+              help="A peer built anywhere: lacam3 and its program (build/main), or pypibt and its repository "
+                   "folder; may be given for both. Like --peers, without the folder layout.")
 @click.option("--optimal", is_flag=True, help="The exact methods instead: cbs, basic CBS (the baseline) and joint "
               "A*, optimal sum of costs with proof (default --agents 10,20,30,40).")
 @click.option("--csv", "csv_path", type=click.Path(dir_okay=False), default="mapf-optimal.csv", show_default=True,
               help="With --optimal: where to write the table as CSV.")
 def bench_mapf(folder: str | None, names: str | None, agents: str, time_limit: float, improve: float,
-               peers: str | None, optimal: bool, csv_path: str) -> int:
+               peers: str | None, against: tuple, optimal: bool, csv_path: str) -> int:
     """Classic MAPF on MovingAI maps: LaCAM*'s success, sum of costs, makespan and time; with
     --optimal, the exact methods' proofs and times."""
     from pathlib import Path
 
     from .mapf import MAPS, map_names, mapf_rows, mapf_table, shipped_maps
-    from .peers import available, peers_table
+    from .peers import available, peer_at, peers_table
 
-    if optimal and peers:
+    if optimal and (peers or against):
         raise click.BadParameter("the peers find schedules without proof; bille bench cbs compares the exact "
                                  "methods with libMultiRobotPlanning's CBS", param_hint="--peers")
     if optimal and agents == "50,100,200,300,400":
@@ -300,6 +304,11 @@ def bench_mapf(folder: str | None, names: str | None, agents: str, time_limit: f
     found_peers = available(Path(peers)) if peers else {}
     if peers and not found_peers:
         raise click.BadParameter(f"{peers}: neither lacam3/build/main nor pypibt/pypibt/ in it", param_hint="--peers")
+    for name, path in against:
+        try:
+            found_peers[name] = peer_at(name, Path(path))
+        except ValueError as exc:
+            raise click.BadParameter(str(exc), param_hint="--against") from None
     rows = []
     for row in mapf_rows(where, chosen, counts, time_limit, improve, found_peers):
         rows.append(row)

@@ -41,11 +41,25 @@ print(json.dumps({"time_s": took, "solved": solved, "plan": [[[int(x), int(y)] f
 def available(folder: Path) -> dict[str, Path]:
     """The peers built in ``folder``: name -> what runs it."""
     found = {}
-    if (folder / "lacam3" / "build" / "main").is_file():
-        found["lacam3"] = folder / "lacam3" / "build" / "main"
-    if (folder / "pypibt" / "pypibt" / "__init__.py").is_file():
-        found["pypibt"] = folder / "pypibt"
+    for name in PEERS:
+        try:
+            found[name] = peer_at(name, folder / PEERS[name][0])
+        except ValueError:
+            pass
     return found
+
+
+# name -> (where it lies in a --peers folder, what --against names, a file that must be in it)
+PEERS = {"lacam3": ("lacam3/build/main", "program", None),
+         "pypibt": ("pypibt", "repository folder", "pypibt/__init__.py")}
+
+
+def peer_at(name: str, path: Path) -> Path:
+    """``path`` as what runs peer ``name`` (:data:`PEERS`), or ValueError saying what it is not."""
+    _, what, inside = PEERS[name]
+    if not ((path / inside).is_file() if inside else path.is_file()):
+        raise ValueError(f"{path}: not {name}'s {what}" + (f" (no {inside} in it)" if inside else ""))
+    return path
 
 
 def run_lacam3(binary: Path, map_file: Path, scen: Path, agents: int, instance: Instance, *,
