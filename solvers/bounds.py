@@ -49,6 +49,10 @@ graph (:mod:`bille.instances.distances`): no schedule walks between two poses fa
     least a minimum-cost assignment of ``R`` to distinct cells of ``F`` under ``d*``, plus ``c``:
     ``ceil((assignment + c) / m)`` steps.
 
+``crossings``
+    Tiles that must cross a line between two columns or rows, each in one robot's trip from a
+    pick on one side to a place on the other: with more such tiles than robots, a robot makes
+    the trip and the way back more than once (:mod:`.crossings`, whose docstring proves it).
 ``routing (LP)``
     The carries together with the walks back for more tiles, as a flow of robots through pick
     and place events with tiles conserved cell by cell: a linear program whose minimum bounds
@@ -90,6 +94,7 @@ from bille.instances.distances import INF, manipulates_ahead
 from bille.instances.moveset import Kind
 from bille.instances.run import Budget
 
+from .crossings import crossings_bound
 from .ground import EVERYWHERE, Ground
 from .routing import routing_bound
 from .scaffold import scaffold_bound
@@ -158,6 +163,7 @@ def lower_bound(instance: Instance, *, budget: Budget | None = None, ground: Gro
             impossible.append("the tiles that must go cannot all be carried to cells that must be filled")
         else:
             parts["carrying (matching)"] = -(-(carry + carried) // m)
+            parts["crossings"] = crossings_bound(instance, ground, budget)
             parts["routing (LP)"] = routing_bound(instance, ground, budget)
             if ground is EVERYWHERE:  # within a class's ground, scaffold is already priced or ruled out
                 best = max([v for v in parts.values() if v is not None] + [0])

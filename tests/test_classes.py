@@ -71,6 +71,26 @@ def test_class_bounds_never_exceed_the_class_optimum_across_a_bridge():
     assert counts["compared"] >= 10, counts
 
 
+CROSSING = make("""
+    TTT.
+    TTT.
+    TTT.""", [{"at": [1, 0]}, {"at": [2, 2]}], goal="""
+    .TTT
+    .TTT
+    .TTT""", moveset="point")
+# three tiles go from the west column to the east one: in a schedule that keeps the structure
+# each crosses in one trip (nothing can be set down in between), so one of the two robots crosses
+# twice and walks back in between, which the routing program spreads over both
+
+
+@pytest.mark.slow
+def test_the_crossings_part_counts_a_robot_that_carries_across_twice():
+    parts = lower_bound(CROSSING, ground=BY_KEY["keep-structure"].ground(CROSSING)).parts
+    best, ids = class_optimum(CROSSING, "keep-structure", max_states=300_000)
+    assert validate(CROSSING, Schedule.from_ids(CROSSING, ids)).valid
+    assert parts["routing (LP)"] == 6 < parts["crossings"] == 7 <= best == 8
+
+
 NEEDS_SCAFFOLD = make("""
     T.T.
     TTT.""", [{"at": [2, 1]}, {"at": [0, 0], "carrying": True}], goal="""

@@ -33,7 +33,8 @@ def reference(inst, states: int = MAX_STATES):
 
 def check_bounds(instances, states: int = MAX_STATES) -> dict:
     """Every bound part against the reference; returns counts of what was decided."""
-    counts = {"optimal": 0, "infeasible": 0, "undecided": 0, "routing binds": 0, "scaffold binds": 0}
+    counts = {"optimal": 0, "infeasible": 0, "undecided": 0, "routing binds": 0, "scaffold binds": 0,
+              "crossings binds": 0}
     for inst in instances:
         ref, bounds = reference(inst, states), lower_bound(inst)
         if ref.status == "optimal":
@@ -45,6 +46,8 @@ def check_bounds(instances, states: int = MAX_STATES) -> dict:
             programs = ("routing (LP)", "scaffold scenarios (LP)")
             others = [v for k, v in bounds.parts.items() if k not in programs and v is not None]
             counts["routing binds"] += (bounds.parts.get("routing (LP)") or 0) > max(others, default=0)
+            counts["crossings binds"] += (bounds.parts.get("crossings") or 0) > max(
+                (v for k, v in bounds.parts.items() if k != "crossings" and v is not None), default=0)
             counts["scaffold binds"] += (bounds.parts.get("scaffold scenarios (LP)") or 0) > max(
                 others + [bounds.parts.get("routing (LP)") or 0])
         elif ref.status == "infeasible":
