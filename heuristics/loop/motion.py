@@ -13,6 +13,7 @@ towards their goals (:mod:`.goals`), within the loop's budget. Every layer has t
 """
 from __future__ import annotations
 
+from functools import cache
 from typing import Callable, Protocol
 
 from bille.instances import Instance
@@ -83,10 +84,7 @@ class TemporalAStar:
     def step(self, s, fixed, goals, intents, budget):
         self.failure = None
         # what the replans of this step share: the state does not change between them, Q does
-        walks: dict[int, object] = {}
-        here: dict[int, frozenset] = {}
-        self._walk = lambda i: walks[i] if i in walks else walks.setdefault(i, s.walk(i))
-        self._here = lambda i: here[i] if i in here else here.setdefault(i, s.cells_now(i))
+        self._walk, self._here = cache(s.walk), cache(s.cells_now)
         joint, blocked = self._window(s, fixed, goals, intents)
         if self.shifts is not None:
             return self._paper(s, fixed, goals, intents, budget, joint, blocked)
