@@ -65,6 +65,8 @@ from .sequence import NoSequence, sequence_of
 from .transfer import LoadTransfer
 
 RESTORED = ("circle_shifts", "relays", "swaps")  # counts that a backtrack sets back
+WALKING = ("horizon", "epsilon", "steps", "priority_shifts", "replans", "expanded", "plan_ms_mean",
+           "plan_ms_max")  # the counts of path planning (no jobs)
 
 
 def plan(instance: Instance, *, motion: str | Motion = "temporal-astar", load_transfer: bool = False,
@@ -156,6 +158,8 @@ class Loop:
                             "circle_shifts": 0, "cautious_steps": 0, "replans": 0, "expanded": 0, "backtracks": 0,
                             "goals_dropped": 0, "drops": 0, "evictions": 0,
                             "plan_ms_mean": 0.0, "plan_ms_max": 0.0}
+        if self.path_planning:  # the counts of walking alone
+            self.stats = {k: self.stats[k] for k in WALKING}
         self.motion: Motion = MOTIONS[motion](epsilon=epsilon, horizon=horizon) if isinstance(motion, str) else motion
         # the paper's rules: the motion layer's replans spend the same budget (none with Q fixed)
         self.motion.start(instance, self.stats, (self.max_shifts if shift_priorities else 0) if self.path_planning else None)
