@@ -8,10 +8,10 @@ under classic collisions, whether it searches from the static bound (``solve()``
 first and hands it over), and its default time limit. ``bille methods``, ``-O help``, ``solve()``
 and the parametrized tests read the records.
 
-The paper's planners walk on a fixed structure; on an instance that moves tiles,
-``temporal-astar``, ``mstar`` and ``lacam`` run the reconfiguration loop
-(:mod:`bille.heuristics.loop.reconfigure`) with the planner as its motion layer. Which function serves
-an instance is decided here, not by the planners.
+The paper's planners walk on a fixed structure; on an instance that moves tiles, ``mstar``
+and ``lacam`` run the reconfiguration loop (:mod:`bille.heuristics.loop.reconfigure`) with the
+planner as its motion layer, which is decided here, not by the planners. ``temporal-astar``
+always runs the loop: path planning is the loop with no jobs.
 """
 from __future__ import annotations
 
