@@ -54,6 +54,11 @@ def crossings_bound(instance: Instance, ground: Ground, budget: Budget | None = 
     start, goal = instance.start.tiles.reshape(h, w), instance.goal_tiles.reshape(h, w)
     xs, ys = np.meshgrid(np.arange(w), np.arange(h))
     sides = [xs <= x for x in range(w - 1)] + [ys <= y for y in range(h - 1)]
+    events = {}  # per pose graph: its relaxed graph on the ground, and its (pose, cell) picks and places
+    for graph in instance.world.graphs:
+        if id(graph) not in events:
+            events[id(graph)] = (ground.relaxed(graph), ground.targets(graph, Kind.PICK, w * h),
+                                 ground.targets(graph, Kind.PLACE, w * h))
     best = None
     for side in sides:
         for X in (side, ~side):
@@ -61,26 +66,23 @@ def crossings_bound(instance: Instance, ground: Ground, budget: Budget | None = 
                 return best
             a = int(start[X].sum()) - int(goal[X].sum())
             if a > 0:
-                found = _across(instance, ground, X.ravel(), a)
+                found = _across(instance, events, X.ravel(), a)
                 if found is not None:
                     best = found if best is None else max(best, found)
     return best
 
 
-def _across(instance: Instance, ground: Ground, X: np.ndarray, a: int) -> int | None:
+def _across(instance: Instance, events: dict, X: np.ndarray, a: int) -> int | None:
     """The ``a``-th smallest of the numbers ``T_r(k)`` for the side ``X`` (module docstring), or
-    None if the robots cannot make ``a`` trips."""
+    None if the robots cannot make ``a`` trips; ``events`` per pose graph as
+    :func:`crossings_bound` makes them."""
     world, poses = instance.world, instance.start_state.poses
-    n = instance.width * instance.height
     trips = []  # T_r(k) for every robot and k = 1..a
     legs: dict[int, tuple] = {}  # per pose graph: (distances to a pick on X, c, b)
     for i, graph in enumerate(world.graphs):
         if id(graph) not in legs:
-            relaxed = ground.relaxed(graph)
-            pick, cells = ground.targets(graph, Kind.PICK, n)
-            pick = pick[X[cells]]
-            place, cells = ground.targets(graph, Kind.PLACE, n)
-            place = place[~X[cells]]
+            relaxed, (pick, picked), (place, placed) = events[id(graph)]
+            pick, place = pick[X[picked]], place[~X[placed]]
             if len(pick) == 0 or len(place) == 0:
                 legs[id(graph)] = None
                 continue
