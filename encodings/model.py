@@ -64,8 +64,12 @@ class OutOfTime(Exception):
 
 @dataclass(frozen=True)
 class Options:
-    """How to build the model: pruning switches, the connectivity encoding, and two restrictions.
+    """How to build the model: pruning switches, the connectivity encoding, and three restrictions.
 
+    ``no_scaffold`` restricts the schedules to those that never have a tile on a cell empty both
+    at the start and in the goal: nothing is set down, even for a while, where neither has a
+    tile (the class ``no-scaffold`` of :mod:`bille.solvers.classes`). Those cells are constants:
+    empty at every step.
     ``keep_structure`` restricts the schedules to those that pick and place only on the cells
     where the start and the goal differ: a tile of both stays where it is, a cell empty in both
     stays empty (no stepping stone, nothing of the structure moved aside and back).
@@ -81,11 +85,18 @@ class Options:
     connectivity: str = "eager"
     single_carry: bool = False
     keep_structure: bool = False
+    no_scaffold: bool = False
 
     @property
     def kept(self) -> bool:
         """Whether the cells where the start and the goal agree never change."""
         return self.single_carry or self.keep_structure
+
+    @property
+    def restricted(self) -> bool:
+        """Whether no tile is ever on a cell empty at the start and in the goal (each
+        restriction implies it)."""
+        return self.kept or self.no_scaffold
 
 
 @dataclass

@@ -78,8 +78,8 @@ def reachable_poses(instance: Instance, T: int, options, timed: Reach | None, en
 def candidate_cells(instance: Instance, poses: list[list[np.ndarray]], options) -> np.ndarray:
     """Cells that may hold a tile at some time."""
     world = instance.world
-    cand = instance.start.tiles | instance.goal_tiles  # with a restriction (Options.kept), all of them
-    if options.prune_cells and not options.kept:
+    cand = instance.start.tiles | instance.goal_tiles  # with a restriction (Options.restricted), all of them
+    if options.prune_cells and not options.restricted:
         for i, g in enumerate(world.graphs):
             seen = np.zeros(g.num_poses, bool)
             for mask in poses[i]:
@@ -88,7 +88,7 @@ def candidate_cells(instance: Instance, poses: list[list[np.ndarray]], options) 
             if len(places):
                 t = g.target[seen][:, places]
                 cand[t[t >= 0]] = True
-    elif not options.kept:
+    elif not options.restricted:
         cand = ~world.obstacles.copy()
     return cand & ~world.obstacles
 

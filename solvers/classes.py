@@ -137,7 +137,7 @@ CLASSES: tuple[ScheduleClass, ...] = (
 )
 BY_KEY = {c.key: c for c in CLASSES}  # a class comes after the class it is part of
 # the exact methods' restrictions (their proofs hold within them) by the class they are
-RESTRICTIONS = {"keep_structure": "keep-structure", "single_carry": "single-carry"}
+RESTRICTIONS = {"no_scaffold": "no-scaffold", "keep_structure": "keep-structure", "single_carry": "single-carry"}
 
 
 @dataclass(frozen=True)

@@ -216,7 +216,7 @@ def test_pinned_cells_raise_the_no_scaffold_bound_to_the_class_optimum():
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("restriction", ["keep_structure", "single_carry"])
+@pytest.mark.parametrize("restriction", ["no_scaffold", "keep_structure", "single_carry"])
 def test_a_restricted_exact_search_starts_at_its_class_bound_and_finds_the_class_optimum(restriction):
     key = restriction.replace("_", "-")
     compared = 0
@@ -242,3 +242,25 @@ def test_a_restricted_search_on_a_fixed_structure_or_below_its_class_bound():
     capped = solve(BRIDGE, "cpsat", keep_structure=True, max_makespan=10, time_limit=30)
     assert capped.status == "unsolved" and capped.stats["restricted_lower_bound"] == 13
     assert "its class needs 13" in capped.stats["failure"] and capped.lower_bound <= 13
+
+
+@pytest.mark.parametrize("method", ["cpsat", "sat"])
+def test_the_exact_methods_without_scaffold_find_the_class_optimum_of_the_brute_force(method):
+    # the model's restriction (cells empty at the start and in the goal stay empty) against the
+    # breadth-first search that never leaves the class, on tiny instances, two of them where a
+    # schedule that sets a tile down outside the start and the goal is shorter (5 against 4, 8
+    # against 6)
+    compared = costlier = 0
+    needs_scaffold = [i for i in MANY if i.name in ("tiny-10101", "tiny-10102")]
+    for inst in [BRIDGE] + needs_scaffold + [i for i in QUICK if i.num_robots <= 2 and i.is_reconfiguration][:10]:
+        best, _ = class_optimum(inst, "no-scaffold")
+        result = solve(inst, method, no_scaffold=True, time_limit=60)
+        if best is None:
+            assert result.schedule is None and result.status in ("unsolved", "infeasible"), inst.name
+            continue
+        assert result.status == "optimal" and result.metrics.makespan == best, (inst.name, result.status, best)
+        assert validate(inst, result.schedule).valid and "no-scaffold" in classes_of(inst, result.schedule)
+        assert result.stats["restricted_lower_bound"] == best and result.lower_bound <= reference(inst).lower_bound
+        compared += 1
+        costlier += best > reference(inst).lower_bound
+    assert compared >= 8 and costlier == 2

@@ -71,7 +71,9 @@ class ModelOptions(MethodOptions):
     schedules that pick and place where the start and the goal differ (no stepping stone, no
     tile of the structure moved aside), with the proofs of ``single_carry`` about those
     schedules only (bridge-3: 19, where moving the structure gives 15); ``single_carry`` is the
-    stricter of the two. ``incumbent``: a schedule to start from (``bille solve --incumbent
+    stricter of the two. ``no_scaffold``: only schedules that never set a tile down, even for a
+    while, where neither the start nor the goal has one (the class ``no-scaffold``), with the same
+    kind of proofs; both others imply it. ``incumbent``: a schedule to start from (``bille solve --incumbent
     FILE``); must be valid."""
 
     max_makespan: int | None = option(None, at_least=1)
@@ -81,16 +83,19 @@ class ModelOptions(MethodOptions):
     prune_tiles: bool = option(True)
     single_carry: bool = option(False)
     keep_structure: bool = option(False)
+    no_scaffold: bool = option(False)
     incumbent: Schedule | None = option(None)
     travel_time: float | None = option(None, at_least=0)
 
     def model(self) -> Options:
         return Options(prune_reach=self.prune, prune_cells=self.prune, prune_tiles=self.prune and self.prune_tiles,
                        connectivity=self.connectivity, single_carry=self.single_carry,
-                       keep_structure=self.keep_structure and not self.single_carry)
+                       keep_structure=self.keep_structure and not self.single_carry,
+                       no_scaffold=self.no_scaffold and not (self.single_carry or self.keep_structure))
 
     def restriction(self) -> str | None:
-        return "single_carry" if self.single_carry else "keep_structure" if self.keep_structure else None
+        """The narrowest restriction asked for (each implies the ones after it), or None."""
+        return next((r for r in ("single_carry", "keep_structure", "no_scaffold") if getattr(self, r)), None)
 
 
 @dataclass(frozen=True)
@@ -186,7 +191,7 @@ def makespan_search(job: Job, instance: Instance, run: Run | None, max_makespan:
 
 def _class_bound(job: Job, instance: Instance, bounds: Bounds, budget: Budget):
     """For a restricted search, the bound of its class of schedules (:mod:`bille.solvers.classes`:
-    ``keep_structure`` and ``single_carry`` are the classes ``keep-structure`` and ``single-carry``),
+    ``no_scaffold``, ``keep_structure`` and ``single_carry`` are the classes of those names),
     where its horizons start: every horizon below it has no schedule of the class. None for an
     unrestricted search or where the static bound proves the instance infeasible. The class
     bounds ``solve()`` computed with the static bound are used, else computed here."""
@@ -201,7 +206,7 @@ def _class_bound(job: Job, instance: Instance, bounds: Bounds, budget: Budget):
 def _find_incumbent(search: Search, given: Schedule | None, cap_given: bool) -> bool:
     """A first schedule (:func:`bille.solvers.incumbent.to_cap`); its makespan caps the search. True if the
     complete planner proved instead that no schedule exists. A restricted search
-    (``single_carry``, ``keep_structure``) takes none: a schedule outside the restriction would cap
+    (``single_carry``, ``keep_structure``, ``no_scaffold``) takes none: a schedule outside the restriction would cap
     its horizons, and be returned as if it were the restriction's optimum."""
     job = search.job
     if job.restriction:

@@ -27,6 +27,8 @@ RESTRICTIONS = {
                      "single-carry schedule"),
     "keep_structure": ("makespan among the schedules that pick and place only where the start and the goal differ "
                        "(keep_structure)", "schedule that keeps the structure"),
+    "no_scaffold": ("makespan among the schedules that never set a tile down where neither the start nor the goal "
+                    "has one (no_scaffold)", "schedule without scaffold"),
 }
 
 
