@@ -11,6 +11,7 @@ import pytest
 from bille.instances import InstanceError, dump_instance, instance_from_text, is_connected
 from bille.instances.generators.graphs import (grid_graph, hamiltonian_path, parse_graph, random_grid_graph)
 from bille.instances.generators.movingai import from_movingai
+from bille.instances.generators.bridges import bridges
 from bille.instances.generators.random import corridor, crowded, random_reconfiguration
 from bille.solvers import solve, validate
 from bille.tools.cli import main
@@ -23,6 +24,32 @@ GENERATORS = {
     "corridor": lambda seed: corridor(6, 2, seed=seed),
     "corridor-moved": lambda seed: corridor(5, 3, room=4, moved=3, seed=seed),
 }
+FIXED = {  # generators without a seed
+    "bridges": lambda: bridges(tasks=True),
+    "bridges-point": lambda: bridges(platforms=3, width=5, height=3, gap=2, bays=(), moved=2, robots=(2, 0, 1),
+                                     moveset="point"),
+}
+
+
+@pytest.mark.parametrize("bundled, settings", [
+    ("lt-1", {}), ("lt-2", {"gap": 10, "bays": (3, 7)}), ("lt-5", {"width": 5, "robots": (1, 2)}),
+    ("lt-8", {"platforms": 3, "width": 5, "gap": 5, "bays": (2,)}),
+])
+def test_the_bridges_generator_makes_the_load_transfer_maps(bundled, settings):
+    from bille.instances import load_instance
+    from bille.instances.bundled import bundled_path
+
+    made, shipped = bridges(tasks=True, **settings), load_instance(bundled_path(bundled))
+    assert (made.width, made.height, made.moveset.name) == (shipped.width, shipped.height, shipped.moveset.name)
+    assert (made.start.tiles == shipped.start.tiles).all() and (made.goal_tiles == shipped.goal_tiles).all()
+    assert made.robots == shipped.robots and made.tasks == shipped.tasks
+
+
+@pytest.mark.parametrize("kind", FIXED)
+def test_a_bridges_map_loads_valid_and_a_planner_solves_it(kind):
+    inst = instance_from_text(dump_instance(FIXED[kind]()))
+    result = solve(inst, "temporal-astar", time_limit=60)
+    assert result.schedule is not None and validate(inst, result.schedule).valid
 
 
 @pytest.mark.parametrize("kind", GENERATORS)

@@ -92,6 +92,43 @@ def gen_corridor(length, robots, room, moved, moveset, seed, output, as_json) ->
     return _output(corridor(length, robots, room=room, moved=moved, seed=seed, moveset=moveset), output, as_json)
 
 
+def _counts(text: str, option: str) -> tuple[int, ...]:
+    """A comma-separated list of integers (an empty text: none)."""
+    try:
+        return tuple(int(v) for v in text.split(",") if v.strip())
+    except ValueError:
+        raise click.BadParameter(f"expected integers separated by commas, got {text!r}", param_hint=option) from None
+
+
+@gen.command("bridges")
+@click.option("--platforms", type=click.IntRange(min=2, max=100), default=2, show_default=True)
+@click.option("--size", default="4x4", show_default=True, help="Each platform's tiles, WIDTHxHEIGHT.")
+@click.option("--gap", type=click.IntRange(min=1), default=6, show_default=True,
+              help="Columns between two platforms (each bridge's length).")
+@click.option("--bays", default="3", show_default=True,
+              help="Bays on each bridge: offsets from its first column, comma-separated ('' for none).")
+@click.option("--moved", type=click.IntRange(min=1), default=4, show_default=True,
+              help="Tiles of the west platform's first column, from the top, built beside the east platform.")
+@click.option("--robots", default=None, help="Robots per platform, west first, comma-separated (default: 1 each).")
+@click.option("--moveset", default="S7", show_default=True)
+@click.option("--tasks", is_flag=True, help="Add the paper's building sequence: each tile straight across.")
+@click.option("--json", "as_json", is_flag=True, help="Print the instance's summary as one JSON object.")
+@click.option("-o", "--output", type=click.Path(dir_okay=False), help="Write the instance here (default: print it).")
+def gen_bridges(platforms, size, gap, bays, moved, robots, moveset, tasks, as_json, output) -> int:
+    """The load-transfer maps' family: platforms joined by bridges one tile wide with bays; the
+    west platform's first column is built beside the east one. The defaults make lt-1."""
+    from bille.instances.generators.bridges import bridges
+
+    try:
+        width, height = (int(v) for v in size.lower().split("x"))
+    except ValueError:
+        raise click.BadParameter(f"expected WIDTHxHEIGHT, got {size!r}", param_hint="--size") from None
+    counts = _counts(robots, "--robots") if robots is not None else None
+    inst = bridges(platforms=platforms, width=width, height=height, gap=gap, bays=_counts(bays, "--bays"),
+                   moved=moved, robots=counts, moveset=moveset, tasks=tasks)
+    return _output(inst, output, as_json)
+
+
 @gen.command("movingai")
 @click.argument("map_file", metavar="MAP")
 @click.argument("scen", required=False)
