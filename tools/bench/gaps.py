@@ -11,6 +11,14 @@ class of schedules (:mod:`bille.solvers.classes`: ``no-scaffold``, ``keep-struct
 ``single-carry``), the classes the schedule belongs to (``N``, ``K``, ``S``: read from it), and its
 gap within the narrowest of them: never a certified gap, since a schedule outside the class may
 be shorter.
+
+With ``class_exact`` seconds, the exact search restricted to the schedules without scaffold
+(``cpsat -O no_scaffold=true``) runs after anytime, capped one step below anytime's schedule when
+that schedule is one of the class: it finds a shorter schedule of the class, or proves that none
+is shorter (anytime's is then optimal within the class), or raises the class bound as far as it
+decides horizons. The row gets the class bound it proved (``N exact``), the makespan of the best
+schedule of the class either search found (``N best``) and the gap between the two (``N gap``):
+which side of the class gap is open, measured.
 """
 from __future__ import annotations
 
@@ -21,8 +29,9 @@ from ..common import instance_arg, solved
 from ..tables import text_table
 
 
-def row(arg: str, time_limit: float) -> dict:
-    """The measured row of one instance (a file or a bundled name)."""
+def row(arg: str, time_limit: float, class_exact: float | None = None) -> dict:
+    """The measured row of one instance (a file or a bundled name); with ``class_exact``, the
+    restricted exact search's columns too (module docstring)."""
     inst = instance_arg(arg)
     result = solved(solve(inst, "anytime", time_limit=time_limit))
     stats = result.stats
@@ -37,7 +46,28 @@ def row(arg: str, time_limit: float) -> dict:
                 first=stats.get("first", {}), free=stats.get("windows", {}).get("shortened", 0),
                 kept=stats.get("kept_windows", {}).get("shortened", 0), time_s=round(result.time_s, 1),
                 class_bounds={k: v.get("lower_bound") for k, v in stats.get("class_bounds", {}).items()},
-                classes=stats.get("classes"))
+                classes=stats.get("classes"), exact=_class_exact(inst, result, class_exact) if class_exact else None)
+
+
+def _class_exact(inst, anytime, seconds: float) -> dict | None:
+    """The restricted exact search after ``anytime`` (module docstring): ``lower``, the bound it
+    proved for the schedules without scaffold (at least the class's static bound), ``best``, the
+    shortest schedule of the class found by either search, and ``optimal``: whether they meet.
+    None where the instance moves no tiles or the class has no schedule."""
+    bound = anytime.stats.get("class_bounds", {}).get("no-scaffold", {}).get("lower_bound")
+    if bound is None:
+        return None
+    own = anytime.metrics.makespan if anytime.schedule is not None and "no-scaffold" in anytime.stats.get(
+        "classes", ()) else None
+    if own is not None and own <= bound:
+        return {"lower": bound, "best": own, "optimal": True, "time_s": 0.0}
+    exact = solve(inst, "cpsat", no_scaffold=True, time_limit=seconds,
+                  max_makespan=None if own is None else own - 1)
+    lower = max(bound, exact.stats.get("restricted_lower_bound") or 0)
+    found = [m for m in (own, exact.metrics.makespan if exact.schedule is not None else None) if m is not None]
+    best = min(found, default=None)
+    return {"lower": lower, "best": best, "optimal": best is not None and best <= lower,
+            "time_s": round(exact.time_s, 1)}
 
 
 def _proved_by(stats: dict, lower, static: int) -> str:
@@ -57,8 +87,10 @@ def _when(timeline, value):
 
 def table(rows: list[dict]) -> list[str]:
     short = {c.key: c.key[0].upper() for c in CLASSES}
+    exact = any(r.get("exact") is not None for r in rows)
     columns = ["instance", "static (part)", "LB", "by", "at s", "makespan", "at s", "first", "free", "kept",
-               "gap"] + [f"LB {short[c.key]}" for c in CLASSES] + ["in", "class gap", "status"]
+               "gap"] + [f"LB {short[c.key]}" for c in CLASSES] + ["in", "class gap", "status"] + (
+        ["N exact", "N best", "N gap", "exact s"] if exact else [])
     body = []
     for r in rows:
         first = f"{r['first'].get('makespan')} {r['first'].get('method', '')}".strip() if r["first"] else None
@@ -68,12 +100,24 @@ def table(rows: list[dict]) -> list[str]:
         shown = None if r.get("classes") is None else "".join(short[k] for k in r["classes"]) or "-"
         body.append([r["instance"], f"{r['static']} ({r['static_part']})", r["lower"], r["lower_by"], r["lower_s"],
                      r["makespan"], r["best_s"], first, r["free"], r["kept"], _gap(r["makespan"], r["lower"])]
-                    + [bounds.get(c.key) for c in CLASSES] + [shown, within, r["status"]])
+                    + [bounds.get(c.key) for c in CLASSES] + [shown, within, r["status"]]
+                    + (_exact_cells(r.get("exact")) if exact else []))
     legend = ", ".join(f"{short[c.key]} {c.name}" for c in CLASSES)
-    return text_table(columns, body, right={"LB", "at s", "makespan", "free", "kept", "gap", "class gap"}
-                      | {f"LB {short[c.key]}" for c in CLASSES}) + [
-        f"classes of schedules: {legend}; 'in': those the schedule belongs to; 'class gap': within the narrowest "
-        "of them (not a certified gap)"]
+    notes = [f"classes of schedules: {legend}; 'in': those the schedule belongs to; 'class gap': within the "
+             "narrowest of them (not a certified gap)"]
+    if exact:
+        notes.append("'N exact': the bound for schedules without scaffold with the exact search restricted to them; "
+                     "'N best': the shortest such schedule found; 'N gap': between the two ('optimal' where they meet)")
+    return text_table(columns, body, right={"LB", "at s", "makespan", "free", "kept", "gap", "class gap", "N exact",
+                                            "N best", "N gap", "exact s"}
+                      | {f"LB {short[c.key]}" for c in CLASSES}) + notes
+
+
+def _exact_cells(exact: dict | None) -> list:
+    if exact is None:
+        return [None] * 4
+    gap = "optimal" if exact["optimal"] else _gap(exact["best"], exact["lower"])
+    return [exact["lower"], exact["best"], gap, exact["time_s"]]
 
 
 def _gap(makespan, lower) -> str | None:

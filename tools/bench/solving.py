@@ -44,9 +44,12 @@ def bench_anytime(time_limit: float, maps: str) -> int:
               help="Seconds of anytime solving per instance.")
 @click.option("--maps", default=",".join([f"lt-{k}" for k in range(1, 9)] + ["bridge-2"]), show_default=True,
               help="Comma-separated instance files or bundled names.")
-def bench_gaps(time_limit: float, maps: str) -> int:
+@click.option("--class-exact", type=click.FloatRange(min=1), default=None,
+              help="Seconds per instance for the exact search among the schedules without scaffold, after "
+                   "anytime: the class's optimum or a higher class bound (columns N exact, N best, N gap).")
+def bench_gaps(time_limit: float, maps: str, class_exact: float | None) -> int:
     """Certified gaps of anytime solving, and what proved each end: the static bound and its
     strongest part, the bound reached and how, the best schedule and which search shortened it."""
     from .gaps import row, table
 
-    return _measure(_names(maps), lambda name: row(name, time_limit), table, "instances")
+    return _measure(_names(maps), lambda name: row(name, time_limit, class_exact), table, "instances")
