@@ -24,3 +24,19 @@ def test_what_proved_the_bound():
     assert _proved_by(stats, 23, 14) == "window"
     assert _proved_by(stats, 19, 14) == "ahead"
     assert _proved_by(stats, 17, 14) == "rise"
+
+
+def test_bench_gaps_class_exact_finds_the_class_optimum_of_the_brute_force(tmp_path):
+    from bille.instances import save_instance
+    from refsearch import class_optimum
+    from test_soundness import MANY
+
+    # the optimum (6) sets a tile down outside the start and the goal; without scaffold it takes 8
+    inst = next(i for i in MANY if i.name == "tiny-10102")
+    best, _ = class_optimum(inst, "no-scaffold")
+    path = tmp_path / "t.yaml"
+    save_instance(inst, path)
+    out = CliRunner().invoke(cli, ["bench", "gaps", "--time-limit", "20", "--maps", str(path), "--class-exact", "30"])
+    assert out.exit_code == 0, out.output
+    row = next(line for line in out.output.splitlines() if line.strip().startswith(inst.name)).split()
+    assert best == 8 and row[-4:-1] == ["8", "8", "optimal"], row
