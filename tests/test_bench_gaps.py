@@ -1,4 +1,5 @@
 """bille bench gaps: one anytime run per instance, and what proved each end of its gap."""
+import pytest
 from click.testing import CliRunner
 
 from bille.tools.bench.gaps import _proved_by
@@ -40,3 +41,18 @@ def test_bench_gaps_class_exact_finds_the_class_optimum_of_the_brute_force(tmp_p
     assert out.exit_code == 0, out.output
     row = next(line for line in out.output.splitlines() if line.strip().startswith(inst.name)).split()
     assert best == 8 and row[-4:-1] == ["8", "8", "optimal"], row
+
+
+@pytest.mark.slow
+def test_bench_gaps_class_exact_below_anytime_schedule_finds_the_optimum_without_scaffold(tmp_path):
+    # lt-1 with one tile: the best schedule without scaffold takes 16 steps (the exact search
+    # proves 15 has none); whatever anytime finds in 5 s, capped below it the search ends there
+    from bille.instances import save_instance
+    from bille.instances.generators.bridges import bridges
+
+    path = tmp_path / "one.yaml"
+    save_instance(bridges(moved=1), path)
+    out = CliRunner().invoke(cli, ["bench", "gaps", "--time-limit", "5", "--maps", str(path), "--class-exact", "300"])
+    assert out.exit_code == 0, out.output
+    row = next(line for line in out.output.splitlines() if line.strip().startswith("bridges-")).split()
+    assert row[-4:-1] == ["16", "16", "optimal"], row
