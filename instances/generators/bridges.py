@@ -19,8 +19,9 @@ Layout, with platforms of ``width x height`` tiles and the grid's border row and
   others face west from their west edge (so none stands on a moving tile);
 - with ``tasks``, the paper's building sequence: each moving tile straight across, from the top.
 
-With the defaults it is lt-1; ``gap=10, bays=(3, 7)`` gives lt-2, and three 5x4 platforms with
-gaps of 5 and a bay in the middle (offset 2) give lt-8 (tests/test_generators.py checks all three against the bundled maps).
+With the defaults it is lt-1; ``gap=10, bays=(3, 7)`` gives lt-2, ``width=5, robots=(1, 2)``
+lt-5, and three 5x4 platforms with gaps of 5 and a bay in the middle (offset 2) lt-8
+(tests/test_generators.py checks them against the bundled maps). The map has no randomness.
 """
 from __future__ import annotations
 
