@@ -244,6 +244,7 @@ def test_a_restricted_search_on_a_fixed_structure_or_below_its_class_bound():
     assert "its class needs 13" in capped.stats["failure"] and capped.lower_bound <= 13
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("method", ["cpsat", "sat"])
 def test_the_exact_methods_without_scaffold_find_the_class_optimum_of_the_brute_force(method):
     # the model's restriction (cells empty at the start and in the goal stay empty) against the
