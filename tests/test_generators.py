@@ -45,6 +45,18 @@ def test_the_bridges_generator_makes_the_load_transfer_maps(bundled, settings):
     assert made.robots == shipped.robots and made.tasks == shipped.tasks
 
 
+@pytest.mark.parametrize("argv, message", [
+    (["--bays", "6"], "bay offset 6 is not on a bridge of 6 columns"),
+    (["--robots", "1,1,1"], "3 robot counts for 2 platforms"),
+    (["--robots", "0,0"], "at least one in all"),
+    (["--moved", "5"], "1 to 4 tiles can move"),
+    (["--size", "3x4"], "platforms of at least 4x3 tiles, got 3x4"),
+    (["--size", "4by4"], "expected WIDTHxHEIGHT, got '4by4'"),
+])
+def test_gen_bridges_refuses_numbers_that_make_no_such_map(tmp_path, rejects, argv, message):
+    rejects(["gen", "bridges", *argv], message, tmp_path / "b.yaml")
+
+
 @pytest.mark.parametrize("kind", FIXED)
 def test_a_bridges_map_loads_valid_and_a_planner_solves_it(kind):
     inst = instance_from_text(dump_instance(FIXED[kind]()))
