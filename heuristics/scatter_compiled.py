@@ -21,6 +21,7 @@ from numba import njit, types
 from numba.typed import Dict
 
 NEVER = 1 << 30  # no path ends on the cell
+loaded = False  # whether a search has run in this process (the kernels are loaded)
 
 
 def _compiled(function):
@@ -31,7 +32,6 @@ def _compiled(function):
         return njit(cache=True)(function)
     except RuntimeError:  # Numba: "cannot cache function ...: no locator available"
         return njit(function)
-loaded = False  # whether a search has run in this process (the kernels are loaded)
 
 
 @_compiled
