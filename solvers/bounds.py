@@ -97,7 +97,7 @@ from bille.instances.run import Budget
 from .crossings import crossings_bound
 from .ground import EVERYWHERE, Ground
 from .routing import routing_bound
-from .scaffold import scaffold_bound
+from .scaffold import Scenarios, scaffold_search
 
 
 def _scaffold_budget(budget: Budget | None) -> Budget | None:
@@ -110,12 +110,15 @@ def _scaffold_budget(budget: Budget | None) -> Budget | None:
 class Bounds:
     """Lower bound on the makespan, its parts, and reasons why no schedule exists (if any);
     ``classes``: the bounds of the classes of schedules (:func:`.classes.class_bounds`) where
-    ``solve()`` computed them with this bound."""
+    ``solve()`` computed them with this bound; ``scaffold``: the scaffold scenarios' search
+    where more time can raise its part (:class:`.scaffold.Scenarios`: ``anytime`` takes it
+    further)."""
 
     lower: int
     parts: dict
     impossible: list[str]
     classes: dict | None = None
+    scaffold: Scenarios | None = None
 
 
 def lower_bound(instance: Instance, *, budget: Budget | None = None, ground: Ground = EVERYWHERE) -> Bounds:
@@ -132,6 +135,7 @@ def lower_bound(instance: Instance, *, budget: Budget | None = None, ground: Gro
     m = max(1, instance.num_robots)
     parts: dict = {}
     impossible: list[str] = []
+    scaffold = None
 
     goal_steps = 0
     for i, cell in enumerate(instance.goal_cells):
@@ -167,9 +171,10 @@ def lower_bound(instance: Instance, *, budget: Budget | None = None, ground: Gro
             parts["routing (LP)"] = routing_bound(instance, ground, budget)
             if ground is EVERYWHERE:  # within a class's ground, scaffold is already priced or ruled out
                 best = max([v for v in parts.values() if v is not None] + [0])
-                parts["scaffold scenarios (LP)"] = scaffold_bound(instance, _scaffold_budget(budget), floor=best)
+                scaffold = scaffold_search(instance, _scaffold_budget(budget), floor=best)
+                parts["scaffold scenarios (LP)"] = scaffold.value
     lower = max([v for v in parts.values() if v is not None] + [0])
-    return Bounds(lower, parts, impossible)
+    return Bounds(lower, parts, impossible, scaffold=None if scaffold is None or scaffold.finished else scaffold)
 
 
 def _worst(earliest: np.ndarray, cells: np.ndarray, world, impossible: list[str], why: str) -> int | None:

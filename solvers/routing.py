@@ -31,12 +31,26 @@ robot's distance to its goal cell (the least over the robots, since robots share
 
 The program has two arcs per pair of cells, so it is built only for instances of at most
 :data:`MAX_CELLS` cells that some robot can pick or place on.
+
+**Split by robot** (``split``). The schedule's flow is the sum of one flow per robot: robot
+``r``'s carries and walks, in order, are a path from its own start through the event nodes to its
+end, a unit flow of integers, and it takes at most ``T`` actions, so the cost of its path is at
+most ``T``. So ``T`` is at least the least ``t`` of an integer program: one copy of the arcs and
+of the conservation rows per robot (robot ``r``'s copy leaves only its own start), the tile
+balance and the groups on their sum, and each copy's cost at most ``t``. A robot's path that
+leaves no room for the other robots' share, where the linear program spreads the work evenly,
+raises it: on lt-2's scenario with scaffold in every column of the bridge, 102 actions are 51
+steps each for the two robots fractionally but 52 in integers. The program is solved by HiGHS's
+branch and bound (through OR-Tools); its proved bound is used, as the ceiling: the least ``t``
+is the cost of some robot's path, an integer. It has ``m`` times the arcs and is an integer
+program, seconds where the linear program takes a fraction of one, so it is solved only where
+asked (:mod:`.scaffold`, for the scenario that holds its bound down).
 """
 from __future__ import annotations
 
 import numpy as np
 from scipy.optimize import linprog
-from scipy.sparse import coo_matrix
+from scipy.sparse import coo_matrix, vstack
 
 from bille.instances import Instance
 from bille.instances.distances import INF
@@ -46,7 +60,7 @@ from bille.instances.run import Budget
 MAX_CELLS = 200
 
 
-def routing_bound(instance: Instance, ground, budget: Budget | None = None, places=()) -> int | None:
+def routing_bound(instance: Instance, ground, budget: Budget | None = None, places=(), split: bool = False) -> int | None:
     """``ceil(LP / m)`` of the module docstring, or None when the program is not built (too
     many cells) or not solved (within ``budget``, or not at all: infeasible). ``ground``
     (:class:`.ground.Ground`) gives the relaxed graphs and the ``(pose, cell)`` pairs of the
@@ -107,7 +121,7 @@ def routing_bound(instance: Instance, ground, budget: Budget | None = None, plac
     groups = [[index[c] for c in group if c in index] for group in places]
     if not all(groups):
         return None
-    return _solve(k, m, balance, carry, walk, ends, robot_rows, budget, groups)
+    return _solve(k, m, balance, carry, walk, ends, robot_rows, budget, groups, split)
 
 
 def _mask(n: int, cells: list[int]) -> np.ndarray:
@@ -116,61 +130,113 @@ def _mask(n: int, cells: list[int]) -> np.ndarray:
     return out
 
 
-def _solve(k, m, balance, carry, walk, ends, robot_rows, budget: Budget | None, groups=()) -> int | None:
+def _solve(k, m, balance, carry, walk, ends, robot_rows, budget: Budget | None, groups=(), split=False) -> int | None:
     """Build and solve the program: variables are arc flows; rows are the robot supplies (0 ..
     m-1), the conservation at the pick nodes (``K``) and the place nodes (``P``: inflow minus
     outflow is 0), and the tile balance per cell (``B``: arcs into its place node minus arcs
     into its pick node); then one inequality per group of place nodes (``groups``, indices of
-    cells): the arcs into them sum to at least 1."""
-    K, P, B = m, m + k, m + 2 * k  # first row of each block
-    costs, entries = [], []  # per block of arcs: costs, and (rows, values) per entry
-
-    def arcs(cost, *rows_values):
-        costs.append(np.asarray(cost, dtype=float))
-        entries.append(rows_values)
-
+    cells): the arcs into them sum to at least 1. With ``split``, the integer program of the
+    module docstring's last section: one copy of the arcs and of ``K`` and ``P`` per robot."""
+    arcs = []  # (robot, or None for every robot: cost, [(block, indices, values), ...])
     for r, (first, alone, carrying) in enumerate(robot_rows):
         j = np.flatnonzero(first < INF)
         one = np.ones(len(j))
         if carrying:  # its first event is a place
-            arcs(first[j] + 1, (np.full(len(j), r), one), (P + j, one), (B + j, one))
+            arcs.append((r, first[j] + 1, [("supply", np.full(len(j), r), one), ("P", j, one), ("B", j, one)]))
         else:
-            arcs(first[j] + 1, (np.full(len(j), r), one), (K + j, one), (B + j, -one))
-            if alone < INF:
-                arcs([alone], (np.array([r]), np.ones(1)))  # it never picks
+            arcs.append((r, first[j] + 1, [("supply", np.full(len(j), r), one), ("K", j, one), ("B", j, -one)]))
+            if alone < INF:  # it never picks
+                arcs.append((r, np.array([alone]), [("supply", np.array([r]), np.ones(1))]))
     i, j = np.nonzero(carry < INF)  # a carry: the pick was paid on the way in, the place here
     one = np.ones(len(i))
-    arcs(carry[i, j] + 1, (K + i, -one), (P + j, one), (B + j, one))
+    arcs.append((None, carry[i, j] + 1, [("K", i, -one), ("P", j, one), ("B", j, one)]))
     j, i = np.nonzero(walk < INF)  # a walk, and the pick it ends with
     one = np.ones(len(i))
-    arcs(walk[j, i] + 1, (P + j, -one), (K + i, one), (B + i, -one))
+    arcs.append((None, walk[j, i] + 1, [("P", j, -one), ("K", i, one), ("B", i, -one)]))
     j = np.flatnonzero(ends < INF)
-    arcs(ends[j], (P + j, -np.ones(len(j))))
-    rows, cols, vals, base = [], [], [], 0
-    for cost, block in zip(costs, entries):
-        for r, v in block:
-            rows.append(r)
-            cols.append(base + np.arange(len(cost)))
-            vals.append(v)
-        base += len(cost)
-    a = coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-                   shape=(m + 3 * k, base)).tocsr()
-    b = np.concatenate([np.ones(m), np.zeros(2 * k), balance])
-    options = {}
-    seconds = None if budget is None else budget.seconds()
+    arcs.append((None, ends[j], [("P", j, -np.ones(len(j)))]))
     if budget is not None and budget.expired():
         return None
-    if seconds is not None:
-        options["time_limit"] = seconds
+    if split:
+        return _split(k, m, balance, arcs, budget, groups)
+    first_row = {"supply": 0, "K": m, "P": m + k, "B": m + 2 * k}
+    a, costs, _ = _matrix(arcs, lambda block, r: first_row[block], m + 3 * k, [None])
+    b = np.concatenate([np.ones(m), np.zeros(2 * k), balance])
+    options = {}
+    if budget is not None and budget.seconds() is not None:
+        options["time_limit"] = budget.seconds()
     bounds_ub = {}
-    if groups:  # arcs into a place node: its conservation row's +1 entries
-        into = a[P:P + k].maximum(0)
-        sizes = [len(g) for g in groups]
-        member = coo_matrix((np.ones(sum(sizes)), (np.repeat(np.arange(len(groups)), sizes), np.concatenate(groups))),
-                            shape=(len(groups), k)).tocsr()  # [group, cell]: the cell is in the group
-        bounds_ub = {"A_ub": -(member @ into), "b_ub": -np.ones(len(groups))}
-    got = linprog(np.concatenate(costs), A_eq=a, b_eq=b, bounds=(0, None), method="highs", options=options,
-                  **bounds_ub)
+    if groups:
+        bounds_ub = {"A_ub": -(_members(groups, k) @ a[m + k:m + 2 * k].maximum(0)), "b_ub": -np.ones(len(groups))}
+    got = linprog(costs, A_eq=a, b_eq=b, bounds=(0, None), method="highs", options=options, **bounds_ub)
     if got.status != 0:  # not solved (in time): no bound from the program
         return None
     return int(np.ceil(got.fun / m - 1e-6))
+
+
+def _matrix(arcs, first_row, rows: int, owners):
+    """The sparse matrix of ``arcs`` (:func:`_solve`), its column costs and each column's robot:
+    the arcs of every robot once per owner in ``owners`` (``[None]``: once, shared), block
+    ``block``'s rows of robot ``r`` starting at ``first_row(block, r)``."""
+    entries, costs, owner, base = [], [], [], 0
+    for who, cost, blocks in arcs:
+        for r in owners if who is None else [who]:
+            n = len(cost)
+            for block, index, values in blocks:
+                entries.append((first_row(block, r) + index, base + np.arange(n), values))
+            costs.append(np.asarray(cost, dtype=float))
+            owner.append(np.full(n, -1 if r is None else r))
+            base += n
+    rows_, cols, vals = (np.concatenate(part) for part in zip(*entries))
+    return coo_matrix((vals, (rows_, cols)), shape=(rows, base)).tocsr(), np.concatenate(costs), np.concatenate(owner)
+
+
+def _members(groups, k: int):
+    """``[group, cell]``: whether the cell is in the group."""
+    sizes = [len(g) for g in groups]
+    return coo_matrix((np.ones(sum(sizes)), (np.repeat(np.arange(len(groups)), sizes), np.concatenate(groups))),
+                      shape=(len(groups), k)).tocsr()
+
+
+def _split(k, m, balance, arcs, budget: Budget | None, groups) -> int | None:
+    """The per-robot integer program (module docstring), solved by HiGHS's branch and bound
+    within ``budget``; the ceiling of its proved bound, or None where none is proved in time."""
+    from ortools.linear_solver import pywraplp
+
+    def first_row(block, r):  # per robot: its supply row, then its K and P rows; B shared
+        return {"supply": 0, "K": m + 2 * k * r, "P": m + 2 * k * r + k, "B": m + 2 * k * m}[block]
+
+    a, costs, owner = _matrix(arcs, first_row, m + 2 * k * m + k, range(m))
+    b = np.concatenate([np.ones(m), np.zeros(2 * k * m), balance])
+    solver = pywraplp.Solver.CreateSolver("HIGHS")
+    solver.SetNumThreads(1)
+    # HiGHS's reduced-cost heuristic at the root ignores the time limit on these programs (minutes)
+    solver.SetSolverSpecificParametersAsString("mip_heuristic_run_root_reduced_cost = false\noutput_flag = false")
+    infinity = solver.infinity()
+    flow = [solver.IntVar(0, infinity, "") for _ in range(a.shape[1])]
+    makespan = solver.NumVar(0, infinity, "T")
+    rows = [a]
+    if groups:
+        into = [a[first_row("P", r):first_row("P", r) + k].maximum(0) for r in range(m)]
+        rows.append(_members(groups, k) @ sum(into))
+    bounds = [(v, v) for v in b] + [(1, infinity)] * len(groups)
+    matrix = vstack(rows).tocsr()
+    for row, (low, high) in enumerate(bounds):
+        constraint = solver.Constraint(float(low), float(high))
+        for col, value in zip(matrix.indices[matrix.indptr[row]:matrix.indptr[row + 1]],
+                              matrix.data[matrix.indptr[row]:matrix.indptr[row + 1]]):
+            constraint.SetCoefficient(flow[col], float(value))
+    for r in range(m):  # robot r takes at most T actions
+        constraint = solver.Constraint(-infinity, 0.0)
+        constraint.SetCoefficient(makespan, -1.0)
+        for col in np.flatnonzero(owner == r):
+            constraint.SetCoefficient(flow[col], float(costs[col]))
+    solver.Minimize(makespan)
+    if budget is not None and budget.expired():
+        return None
+    if budget is not None and budget.seconds() is not None:
+        solver.SetTimeLimit(max(1, int(1000 * budget.seconds())))
+    status = solver.Solve()
+    if status not in (pywraplp.Solver.OPTIMAL, pywraplp.Solver.FEASIBLE):
+        return None
+    return int(np.ceil(solver.Objective().BestBound() - 1e-6))

@@ -60,10 +60,104 @@ def scaffold_bound(instance: Instance, budget: Budget | None = None, floor: int 
     most :data:`SECONDS`); None where no line is a corridor line, no program is solved, or it
     cannot exceed ``floor`` (the other parts' best): the scenario with scaffold in every corridor
     line, whose value the part never exceeds, is tried first."""
+    return scaffold_search(instance, budget, floor).value
+
+
+def scaffold_search(instance: Instance, budget: Budget | None = None, floor: int = 0) -> Scenarios:
+    """:func:`scaffold_bound`'s search, as it stands when ``budget`` ran out: its ``value`` is the
+    part, and :meth:`Scenarios.advance` takes it further."""
     budget = (budget or Budget()).child(SECONDS)
-    found = [_search(instance, line, corridor, budget, floor) for line, corridor in corridor_lines(instance)]
-    found = [v for v in found if v is not None]
-    return max(found) if found else None
+    search = Scenarios([_Lines(instance, line, corridor) for line, corridor in corridor_lines(instance)])
+    for lines in search.lines:
+        lines.begin(budget, floor)
+    search.advance(budget)
+    return search
+
+
+class Scenarios:
+    """The best-first search of the module docstring over the families of scenarios, one per kind
+    of line (columns, rows), resumable: ``value`` is the larger of their bounds so far (None
+    where neither has one), ``finished`` whether more time can raise it no further.
+
+    :meth:`advance` with ``split`` also solves the per-robot integer program of
+    :mod:`.routing` (its last section) for a single scenario once it has the least value: that
+    program's bound is a bound for the schedules of that scenario too, and the scenario goes back
+    among the families with it (each scenario is split once, whether the program is solved in
+    time or not)."""
+
+    def __init__(self, lines: list[_Lines]) -> None:
+        self.lines = lines
+
+    @property
+    def value(self) -> int | None:
+        found = [lines.value for lines in self.lines if lines.value is not None]
+        return max(found) if found else None
+
+    @property
+    def finished(self) -> bool:
+        return all(lines.finished for lines in self.lines)
+
+    def advance(self, budget: Budget, split: bool = False, on_value=None) -> int | None:
+        """Search on until ``budget`` expires or nothing is left to do; the value then.
+        ``on_value`` hears of every rise of the value, as it happens."""
+        held = [self.value]
+
+        def changed() -> None:
+            if on_value is not None and self.value is not None and (held[0] is None or self.value > held[0]):
+                held[0] = self.value
+                on_value(self.value)
+
+        for lines in self.lines:
+            lines.advance(budget, split, changed)
+        return self.value
+
+
+class _Lines:
+    """The search over the scenarios of one kind of line (:class:`Scenarios`)."""
+
+    def __init__(self, instance: Instance, line: np.ndarray, corridor: tuple) -> None:
+        self.instance, self.line, self.corridor = instance, line, corridor
+        self.heap: list = []  # (value, lines in, lines undecided, split): the families not split
+        self.finished = False
+
+    @property
+    def value(self) -> int | None:
+        return self.heap[0][0] if self.heap else None
+
+    def _value(self, budget: Budget, inside: tuple, allowed: tuple, split: bool = False) -> int | None:
+        if budget.expired():
+            return None
+        return scenario_value(self.instance, self.line, self.corridor, inside, allowed, budget, split)
+
+    def begin(self, budget: Budget, floor: int) -> None:
+        """The root family, unless the scenario with every line cannot exceed ``floor``."""
+        every = self._value(budget, self.corridor, self.corridor)
+        root = None if every is None or every <= floor else self._value(budget, (), self.corridor)
+        if root is None:
+            self.finished = True
+        else:
+            self.heap = [(root, (), self.corridor, False)]
+
+    def advance(self, budget: Budget, split: bool, changed=lambda: None) -> None:
+        heap = self.heap
+        while heap and not self.finished and not budget.expired():
+            lower, inside, undecided, done = heap[0]
+            if not undecided:  # a single scenario has the least value
+                if done:
+                    self.finished = True  # nothing lower can be proved
+                    break
+                if not split:
+                    break
+                got = self._value(budget, inside, inside, split=True)
+                heapq.heapreplace(heap, (lower if got is None else max(lower, got), inside, (), True))
+                changed()
+                continue
+            heapq.heappop(heap)
+            j, rest = undecided[0], undecided[1:]
+            for child in (inside + (j,), inside):
+                got = self._value(budget, child, child + rest)
+                heapq.heappush(heap, (lower if got is None else max(lower, got), child, rest, False))
+            changed()
 
 
 def corridor_lines(instance: Instance) -> list[tuple[np.ndarray, tuple[int, ...]]]:
@@ -81,14 +175,16 @@ def corridor_lines(instance: Instance) -> list[tuple[np.ndarray, tuple[int, ...]
 
 
 def scenario_value(instance: Instance, line: np.ndarray, corridor: tuple, inside: tuple, allowed: tuple,
-                   budget: Budget | None = None) -> int | None:
+                   budget: Budget | None = None, split: bool = False) -> int | None:
     """The program of the family of scenarios ``inside <= Z <= allowed`` (module docstring):
     the routing bound on the ground of ``allowed`` with a place forced in each line of
-    ``inside``; None where it is not solved."""
+    ``inside`` (with ``split``, the per-robot integer program of :mod:`.routing`); None where it
+    is not solved."""
     both = instance.start.tiles | instance.goal_tiles
     ground = both | ~np.isin(line, corridor) | np.isin(line, allowed)
     groups = [np.flatnonzero((line == j) & ~both) for j in inside]
-    return routing_bound(instance, Ground(feet=ground, picks=ground, places=ground), budget, places=groups)
+    return routing_bound(instance, Ground(feet=ground, picks=ground, places=ground), budget, places=groups,
+                         split=split)
 
 
 def scenario_of(instance: Instance, line: np.ndarray, corridor: tuple, tiles) -> tuple:
@@ -97,28 +193,3 @@ def scenario_of(instance: Instance, line: np.ndarray, corridor: tuple, tiles) ->
     both = instance.start.tiles | instance.goal_tiles
     ever = np.logical_or.reduce([t & ~both for t in tiles])
     return tuple(j for j in corridor if ever[line == j].any())
-
-
-def _search(instance: Instance, line: np.ndarray, corridor: tuple, budget: Budget, floor: int) -> int | None:
-    """Best-first search over the families of scenarios of these corridor lines; None at once
-    if the scenario with every line cannot exceed ``floor``."""
-    def value(inside: tuple, allowed: tuple) -> int | None:
-        return None if budget.expired() else scenario_value(instance, line, corridor, inside, allowed, budget)
-
-    every = value(corridor, corridor)
-    if every is None or every <= floor:
-        return None
-    root = value((), corridor)
-    if root is None:
-        return None
-    heap = [(root, (), corridor)]
-    while not budget.expired():
-        lower, inside, undecided = heap[0]
-        if not undecided:
-            break  # a single scenario has the least value: nothing lower can be proved
-        heapq.heappop(heap)
-        j, rest = undecided[0], undecided[1:]
-        for child in (inside + (j,), inside):
-            got = value(child, child + rest)
-            heapq.heappush(heap, (lower if got is None else max(lower, got), child, rest))
-    return heap[0][0]

@@ -394,3 +394,48 @@ def test_compaction_moves_actions_into_waits_and_keeps_the_schedule_valid():
         squeezed = compact(tiny, bind(tiny, found.schedule))
         report = validate(tiny, Schedule.from_ids(tiny, squeezed))
         assert report.valid and brute_force(tiny.name).metrics.makespan <= squeezed.shape[1] <= found.metrics.makespan
+
+
+def test_the_scaffold_scenarios_taken_further_raise_the_bound_in_a_child():
+    # static bound 3 on this instance; the scaffold search, its least scenario's program split
+    # by robot, proves 4, the brute force's optimum
+    from bille.solvers.anytime.bracket import Bracket
+    from bille.solvers.anytime.rise import Scaffold
+    from bille.solvers.bounds import lower_bound
+
+    inst = tiny_instances(1, first_seed=10_003, max_robots=2)[0]
+    bounds = lower_bound(inst)
+    assert bounds.lower == 3 and bounds.scaffold is not None
+    bracket = Bracket(bounds.lower)
+    scaffold = Scaffold(bounds.scaffold, bracket, Budget().child(60), 60)
+    scaffold.run()
+    assert bracket.lower == 4 == bfs(inst, BfsOptions(max_states=20_000)).lower_bound
+    assert [value for _, value in scaffold.proved] == [4] and not scaffold.pending
+
+
+class _Stuck:
+    """A search that proves one value and then never returns, as an integer program may."""
+
+    def advance(self, budget, split=False, on_value=None):
+        on_value(7)
+        import time
+        while True:
+            time.sleep(1)
+
+
+@pytest.mark.parametrize("how", ["time", "cancel"])
+def test_the_scaffold_child_is_stopped_and_what_it_proved_is_kept(how):
+    import threading
+
+    from bille.solvers.anytime.bracket import Bracket
+    from bille.solvers.anytime.rise import Scaffold
+
+    budget = Budget().child(1.0 if how == "time" else 600)
+    bracket = Bracket(5)
+    scaffold = Scaffold(_Stuck(), bracket, budget, 600)
+    if how == "cancel":  # as Ctrl-C does
+        threading.Timer(0.5, budget.cancel).start()
+    scaffold.run()
+    assert bracket.lower == 7 and scaffold.proved[0][1] == 7
+    import multiprocessing
+    assert not multiprocessing.active_children()  # stopped, not left running

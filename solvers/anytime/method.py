@@ -17,9 +17,12 @@ bound in turn, until they meet (``optimal``) or the time runs out (``feasible``,
      proves that no schedule is shorter than ``k + 1``; a satisfiable one is an optimal schedule.
      One CP-SAT worker decides each horizon (``bound_solver``; a python-sat solver instead keeps
      what it learned on an undecided horizon for the next slice). While the neighbourhood search
-     has shortened nothing for a tenth of the time limit, this process decides a horizon above
-     the child's, the highest it expects to decide in time (:class:`.rise.Ahead`; an infeasible
-     horizon proves the ones below it infeasible too).
+     has shortened nothing for a tenth of the time limit, this process helps: once, it takes the
+     static bound's scaffold scenarios further where their share of the static bound's time
+     left them undone (:class:`.rise.Scaffold`, with the per-robot integer program of
+     :mod:`bille.solvers.routing`); then it decides a horizon above the child's, the highest it
+     expects to decide in time (:class:`.rise.Ahead`; an infeasible horizon proves the ones
+     below it infeasible too).
    - **Shortening the schedule**: large neighbourhood search over time windows (after MAPF-LNS,
      Li et al., IJCAI 2021). A window ``[a, b]`` of the schedule is re-solved exactly with the
      time-expanded model: from the state at ``a`` (tiles, poses, loads) to exactly the state at
@@ -50,8 +53,9 @@ ignores the terminal's Ctrl-C and is stopped by the parent.
 shorter schedule), ``lower_bounds`` ([seconds, bound] for every rise), ``windows`` (tried,
 shortened, proved not to shorten, undecided; ``proved_bound`` where the whole schedule's window
 proved it optimal), ``kept_windows`` (the same counts of the kept search), ``bound_search``
-(where the bound search ran), ``ahead`` ([horizon, answer, seconds] decided out of turn), and the
-seconds spent on each search.
+(where the bound search ran), ``ahead`` ([horizon, answer, seconds] decided out of turn),
+``scaffold`` ([seconds, bound] raised by the scaffold scenarios taken further), and the seconds
+spent on each search.
 """
 from __future__ import annotations
 
@@ -72,7 +76,7 @@ from bille.instances.schedule import Schedule
 from ..bounds import Bounds, lower_bound
 from ..incumbent import EXHAUSTED, Incumbent, complete_search, fewer_robots, first_schedule, from_schedule, retry
 from .bracket import Bracket
-from .rise import FORK, Ahead, Background, Rise
+from .rise import FORK, Ahead, Background, Rise, Scaffold
 from .windows import Windows
 
 
@@ -165,12 +169,15 @@ class _Anytime:
         why = self._in_turns()
         background = why is None
         self.stats["bound_search"] = "child process" if background else f"in turns: {why}"
-        rise, ahead, seek, stopped, budget = None, None, None, False, self.budget
+        rise, ahead, scaffold, seek, stopped, budget = None, None, None, None, False, self.budget
         try:
             if background:  # the bound search starts at once, beside the heuristics
                 rise = Background(inst, self.bound_solver, bracket, budget)
                 ahead = Ahead(inst, self.bound_solver, bracket, rise, budget)
                 self.stats["ahead"] = ahead.tried
+                if bounds.scaffold is not None:
+                    scaffold = Scaffold(bounds.scaffold, bracket, budget, self.total)
+                    self.stats["scaffold"] = scaffold.proved
             self._first(first)
             rise = rise or Rise(inst, self.bound_solver, bracket, budget)
             seek = _Seek(inst, self.cut, budget, self.total)
@@ -192,10 +199,16 @@ class _Anytime:
                 if bracket.best.makespan == makespan:  # the search that shortened it last goes on
                     self.windows.reverse()
                 self.stats["search_s"] += part.elapsed()
-                if ahead is not None and self._stalled() and (pick := ahead.pick()) is not None:
-                    began = budget.now()
+                if not self._stalled() or bracket.closed:
+                    continue
+                began = budget.now()
+                if scaffold is not None and scaffold.pending:
+                    scaffold.run()
+                    if rise.k < bracket.lower:  # the child's horizon is refuted already: on from the bound
+                        rise.restart()
+                elif ahead is not None and (pick := ahead.pick()) is not None:
                     ahead.run(*pick)
-                    self.stats["bound_s"] += budget.now() - began
+                self.stats["bound_s"] += budget.now() - began
             rise.step(budget.child(0))  # what the bound search sent while the last part ran
         except KeyboardInterrupt:  # a second Ctrl-C, or a subscriber that raised it: keep what is held
             stopped = True

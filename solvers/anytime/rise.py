@@ -97,22 +97,7 @@ class Background:
 
     def _start(self) -> None:
         self.k = self.bracket.lower
-        self.inbox, outbox = FORK.Pipe(duplex=False)
-        self.child = FORK.Process(target=_rise_child, args=(self.instance, self.solver, self.k, self.budget, outbox),
-                                  daemon=True)
-        # the terminal's Ctrl-C goes to the whole process group: the child ignores it (the parent
-        # stops it), and is born with it held back, so that none lands before it is ignored
-        held = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
-        try:
-            try:
-                self.child.start()
-            finally:
-                signal.pthread_sigmask(signal.SIG_SETMASK, held)  # a Ctrl-C held back lands here
-        except BaseException:
-            self.close()
-            raise
-        finally:
-            outbox.close()
+        self.child, self.inbox = _fork(_rise_child, self.instance, self.solver, self.k, self.budget)
 
     def restart(self) -> None:
         """Start again from the bracket's bound (a proof made elsewhere passed the child's horizon)."""
@@ -144,11 +129,82 @@ class Background:
                 bracket.prove(found.makespan)
 
     def close(self) -> None:
-        if self.child.pid is not None:
-            if self.child.is_alive():
-                self.child.terminate()
-            self.child.join()
-        self.inbox.close()
+        _stop(self.child, self.inbox)
+
+
+def _fork(target, *args) -> tuple:
+    """``target(*args, outbox)`` in a child process, and the end of the pipe it sends on. The
+    terminal's Ctrl-C goes to the whole process group: the child ignores it (the parent stops
+    it), and is born with it held back, so that none lands before it is ignored."""
+    inbox, outbox = FORK.Pipe(duplex=False)
+    child = FORK.Process(target=target, args=(*args, outbox), daemon=True)
+    held = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        try:
+            child.start()
+        finally:
+            signal.pthread_sigmask(signal.SIG_SETMASK, held)  # a Ctrl-C held back lands here
+    except BaseException:
+        _stop(child, inbox)
+        raise
+    finally:
+        outbox.close()
+    return child, inbox
+
+
+def _stop(child, inbox) -> None:
+    if child.pid is not None:
+        if child.is_alive():
+            child.terminate()
+        child.join()
+    inbox.close()
+
+
+def _ignore_ctrl_c() -> None:
+    """In a child of :func:`_fork`: the parent stops it."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+
+
+class Scaffold:
+    """The static bound's scaffold scenarios (:class:`bille.solvers.scaffold.Scenarios`) taken
+    further, where its share of the static bound's time cut the search short or the per-robot
+    integer program of its least scenario is not solved yet: once, while the neighbourhood search
+    finds nothing, for up to a quarter of the time limit (at least 10 s). It runs in a child
+    process, since the integer program cannot be interrupted: the parent waits for it, reads
+    each value it raises, and stops it at the end of its time or at Ctrl-C. ``proved`` lists
+    ``[seconds, value]`` of each bound it raised."""
+
+    def __init__(self, search, bracket: Bracket, budget: Budget, total: float) -> None:
+        self.search, self.bracket, self.budget, self.total = search, bracket, budget, total
+        self.proved: list = []
+
+    @property
+    def pending(self) -> bool:
+        return self.search is not None
+
+    def run(self) -> None:
+        part = self.budget.child(max(10.0, 0.25 * self.total))
+        child, inbox = _fork(_scaffold_child, self.search, part)
+        self.search = None
+        try:
+            while not part.expired():
+                if not inbox.poll(min(part.left(), 0.25)):  # short waits: a Ctrl-C is seen at once
+                    continue
+                try:
+                    value = inbox.recv()
+                except EOFError:
+                    break  # the child is done
+                if self.bracket.prove(value):
+                    self.proved.append([round(self.bracket.elapsed(), 3), value])
+        finally:
+            _stop(child, inbox)
+
+
+def _scaffold_child(search, budget: Budget, outbox) -> None:
+    _ignore_ctrl_c()
+    search.advance(budget, split=True, on_value=outbox.send)
+    outbox.close()
 
 
 class Ahead:
@@ -210,8 +266,7 @@ def _rise_child(instance: Instance, solver: str, lower: int, budget: Budget, out
     """The child's loop: raise the bound until ``budget`` ends (its copy of the parent's: the
     parent's cancel does not reach it, the parent stops it) or an optimal schedule, sending each
     news."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+    _ignore_ctrl_c()
     bracket = Bracket(lower)
     rise = Rise(instance, solver, bracket, budget)
     bracket.on_bound.append(lambda value: outbox.send(("lower", (value, rise.seconds.get(value - 1)))))

@@ -3,7 +3,9 @@
 One ``anytime`` run per instance. A row gives the static lower bound and its strongest part, the
 bound at the end and what proved it (``static``: the bound parts alone; ``rise``: the exact search
 from below, one horizon after another; ``ahead``: a horizon decided above the rising search's,
-:class:`bille.solvers.anytime.rise.Ahead`; ``window``: the whole schedule's window), the best schedule
+:class:`bille.solvers.anytime.rise.Ahead`; ``scaffold``: the static bound's scaffold scenarios
+taken further, :class:`bille.solvers.anytime.rise.Scaffold`; ``window``: the whole schedule's
+window), the best schedule
 and its first schedule's method and makespan, how many windows of each neighbourhood search
 (free, kept) shortened it, the certified gap ``(makespan - LB) / LB`` and the seconds at which
 each end reached its final value. Beside them, on an instance that moves tiles, the bound of each
@@ -77,6 +79,8 @@ def _proved_by(stats: dict, lower, static: int) -> str:
         return "window"
     if any(h + 1 == lower and answer == "unsat" for h, answer, _ in stats.get("ahead", [])):
         return "ahead"
+    if any(value == lower for _, value in stats.get("scaffold", [])):
+        return "scaffold"
     return "rise"
 
 
