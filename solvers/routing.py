@@ -37,10 +37,10 @@ The program has two arcs per pair of cells, so it is built only for instances of
 end, a unit flow of integers, and it takes at most ``T`` actions, so the cost of its path is at
 most ``T``. So ``T`` is at least the least ``t`` of an integer program: one copy of the arcs and
 of the conservation rows per robot (robot ``r``'s copy leaves only its own start), the tile
-balance and the groups on their sum, and each copy's cost at most ``t``. A robot's path that
-leaves no room for the other robots' share, where the linear program spreads the work evenly,
-raises it: on lt-2's scenario with scaffold in every column of the bridge, 102 actions are 51
-steps each for the two robots fractionally but 52 in integers. The program is solved by HiGHS's
+balance and the groups on their sum, and each copy's cost at most ``t``. It is stronger where
+the linear program shares the work out evenly in fractions that no robot's own path can take:
+on lt-2's scenario with scaffold in every column of the bridge, 102 actions are 51 steps for
+each of the two robots in fractions, but 52 for one of them in integers. The program is solved by HiGHS's
 branch and bound (through OR-Tools); its proved bound is used, as the ceiling: the least ``t``
 is the cost of some robot's path, an integer. It has ``m`` times the arcs and is an integer
 program, seconds where the linear program takes a fraction of one, so it is solved only where
@@ -60,7 +60,8 @@ from bille.instances.run import Budget
 MAX_CELLS = 200
 
 
-def routing_bound(instance: Instance, ground, budget: Budget | None = None, places=(), split: bool = False) -> int | None:
+def routing_bound(instance: Instance, ground, budget: Budget | None = None, places=(),
+                  split: bool = False) -> int | None:
     """``ceil(LP / m)`` of the module docstring, or None when the program is not built (too
     many cells) or not solved (within ``budget``, or not at all: infeasible). ``ground``
     (:class:`.ground.Ground`) gives the relaxed graphs and the ``(pose, cell)`` pairs of the
@@ -209,6 +210,8 @@ def _split(k, m, balance, arcs, budget: Budget | None, groups) -> int | None:
     a, costs, owner = _matrix(arcs, first_row, m + 2 * k * m + k, range(m))
     b = np.concatenate([np.ones(m), np.zeros(2 * k * m), balance])
     solver = pywraplp.Solver.CreateSolver("HIGHS")
+    if solver is None:  # an OR-Tools built without HiGHS
+        return None
     solver.SetNumThreads(1)
     # HiGHS's reduced-cost heuristic at the root ignores the time limit on these programs (minutes)
     solver.SetSolverSpecificParametersAsString("mip_heuristic_run_root_reduced_cost = false\noutput_flag = false")

@@ -19,10 +19,11 @@ def test_bench_gaps_refuses_an_unknown_instance_before_any_work():
 
 
 def test_what_proved_the_bound():
-    stats = {"windows": {"proved_bound": 23}, "ahead": [[18, "unsat", 20.0]]}
+    stats = {"windows": {"proved_bound": 23}, "ahead": [[18, "unsat", 20.0]], "scaffold": [[25.1, 15]]}
     assert _proved_by(stats, 14, 14) == "static"
     assert _proved_by(stats, 23, 14) == "window"
     assert _proved_by(stats, 19, 14) == "ahead"
+    assert _proved_by(stats, 15, 14) == "scaffold"
     assert _proved_by(stats, 17, 14) == "rise"
 
 

@@ -9,9 +9,11 @@ of the refusal's message.
 """
 from __future__ import annotations
 
+import atexit
 import collections
 import json
 import os
+import shutil
 import tempfile
 from pathlib import Path
 
@@ -112,6 +114,7 @@ def read_sweep(text: str) -> None:
 
 
 JOURNAL_TMP = tempfile.mkdtemp(prefix="bille-fuzz-")
+atexit.register(shutil.rmtree, JOURNAL_TMP, ignore_errors=True)  # made on import: removed at exit
 
 
 def _journal_seed() -> str:
