@@ -17,12 +17,13 @@ bound in turn, until they meet (``optimal``) or the time runs out (``feasible``,
      proves that no schedule is shorter than ``k + 1``; a satisfiable one is an optimal schedule.
      One CP-SAT worker decides each horizon (``bound_solver``; a python-sat solver instead keeps
      what it learned on an undecided horizon for the next slice). While the neighbourhood search
-     has shortened nothing for a tenth of the time limit, this process helps: once, it takes the
-     static bound's scaffold scenarios further where their share of the static bound's time
-     left them undone (:class:`.rise.Scaffold`, with the per-robot integer program of
-     :mod:`bille.solvers.routing`); then it decides a horizon above the child's, the highest it
-     expects to decide in time (:class:`.rise.Ahead`; an infeasible horizon proves the ones
-     below it infeasible too).
+     has shortened nothing for a tenth of the time limit, this process helps: it decides a
+     horizon above the child's, the highest it expects to decide in time (:class:`.rise.Ahead`;
+     an infeasible horizon proves the ones below it infeasible too); where there is none (the
+     child has not refuted two horizons yet), it takes the static bound's scaffold scenarios
+     further, once, where their share of the static bound's time left them undone
+     (:class:`.rise.Scaffold`, with the per-robot integer program of
+     :mod:`bille.solvers.routing`).
    - **Shortening the schedule**: large neighbourhood search over time windows (after MAPF-LNS,
      Li et al., IJCAI 2021). A window ``[a, b]`` of the schedule is re-solved exactly with the
      time-expanded model: from the state at ``a`` (tiles, poses, loads) to exactly the state at
@@ -202,12 +203,12 @@ class _Anytime:
                 if not self._stalled() or bracket.closed:
                     continue
                 began = budget.now()
-                if scaffold is not None and scaffold.pending:
+                if ahead is not None and (pick := ahead.pick()) is not None:
+                    ahead.run(*pick)
+                elif scaffold is not None and scaffold.pending:  # no horizon worth deciding ahead
                     scaffold.run()
                     if rise.k < bracket.lower:  # the child's horizon is refuted already: on from the bound
                         rise.restart()
-                elif ahead is not None and (pick := ahead.pick()) is not None:
-                    ahead.run(*pick)
                 self.stats["bound_s"] += budget.now() - began
             rise.step(budget.child(0))  # what the bound search sent while the last part ran
         except KeyboardInterrupt:  # a second Ctrl-C, or a subscriber that raised it: keep what is held
