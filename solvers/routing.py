@@ -240,6 +240,7 @@ def _split(k, m, balance, arcs, budget: Budget | None, groups) -> int | None:
     if budget is not None and budget.seconds() is not None:
         solver.SetTimeLimit(max(1, int(1000 * budget.seconds())))
     status = solver.Solve()
-    if status not in (pywraplp.Solver.OPTIMAL, pywraplp.Solver.FEASIBLE):
+    bound = solver.Objective().BestBound()
+    if status not in (pywraplp.Solver.OPTIMAL, pywraplp.Solver.FEASIBLE) or not np.isfinite(bound):
         return None
-    return int(np.ceil(solver.Objective().BestBound() - 1e-6))
+    return int(np.ceil(bound - 1e-6))
