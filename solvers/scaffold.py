@@ -82,8 +82,8 @@ class Scenarios:
     :meth:`advance` with ``split`` also solves the per-robot integer program of
     :mod:`.routing` (its last section) for a single scenario once it has the least value: that
     program's bound is a bound for the schedules of that scenario too, and the scenario goes back
-    among the families with it (each scenario is split once, whether the program is solved in
-    time or not)."""
+    among the families with it (the program is solved once per scenario, whether in time or
+    not)."""
 
     def __init__(self, lines: list[_Lines]) -> None:
         self.lines = lines

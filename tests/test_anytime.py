@@ -2,6 +2,9 @@
 brute-force search on tiny instances."""
 import dataclasses
 import json
+import multiprocessing
+import threading
+import time
 
 import numpy as np
 import pytest
@@ -418,15 +421,12 @@ class _Stuck:
 
     def advance(self, budget, split=False, on_value=None):
         on_value(7)
-        import time
         while True:
             time.sleep(1)
 
 
 @pytest.mark.parametrize("how", ["time", "cancel"])
 def test_the_scaffold_child_is_stopped_and_what_it_proved_is_kept(how):
-    import threading
-
     from bille.solvers.anytime.bracket import Bracket
     from bille.solvers.anytime.rise import Scaffold
 
@@ -437,5 +437,4 @@ def test_the_scaffold_child_is_stopped_and_what_it_proved_is_kept(how):
         threading.Timer(0.5, budget.cancel).start()
     scaffold.run()
     assert bracket.lower == 7 and scaffold.proved[0][1] == 7
-    import multiprocessing
     assert not multiprocessing.active_children()  # stopped, not left running

@@ -331,7 +331,8 @@ def test_the_dimacs_dump_is_compact_and_names_variables_first(tmp_path):
 def test_an_incumbent_above_the_horizon_cap_is_still_returned(method, optimum, monkeypatch):
     from bille.solvers import bounds, scaffold
 
-    monkeypatch.setattr(bounds, "scaffold_search", lambda *a, **k: scaffold.Scenarios([]))  # its bound is the optimum, 9
+    # without the scaffold scenarios, whose bound is the optimum, 9
+    monkeypatch.setattr(bounds, "scaffold_search", lambda *a, **k: scaffold.Scenarios([]))
     inst = TINY["s5-move-tile"]()  # optimum 9, static bound 7 without the scaffold scenarios
     best = solve(inst, "bfs", time_limit=300)
     opt = optimum("s5-move-tile")
@@ -354,7 +355,8 @@ def test_the_default_cap_gives_way_to_a_longer_incumbent(method, optimum, monkey
 
     from bille.solvers import bounds, scaffold
 
-    monkeypatch.setattr(bounds, "scaffold_search", lambda *a, **k: scaffold.Scenarios([]))  # its bound is the optimum, 9
+    # without the scaffold scenarios, whose bound is the optimum, 9
+    monkeypatch.setattr(bounds, "scaffold_search", lambda *a, **k: scaffold.Scenarios([]))
     inst = TINY["s5-move-tile"]()  # optimum 9, static bound 7 without the scaffold scenarios
     lower = lower_bound(inst).lower
     monkeypatch.setattr(exact, "default_cap", lambda bound: bound)  # as if the optimum lay beyond it

@@ -171,10 +171,9 @@ class Scaffold:
     further, where its share of the static bound's time cut the search short or the per-robot
     integer program of its least scenario is not solved yet: once, while the neighbourhood search
     finds nothing and :class:`Ahead` has no horizon to decide, for up to a quarter of the time
-    limit (at least 10 s). It runs in a child
-    process, since the integer program cannot be interrupted: the parent waits for it, reads
-    each value it raises, and stops it at the end of its time or at Ctrl-C. ``proved`` lists
-    ``[seconds, value]`` of each bound it raised."""
+    limit (at least 10 s). It runs in a child process, since the integer program cannot be
+    interrupted: the parent waits for it, reads each value it raises, and stops it at the end of
+    its time or at Ctrl-C. ``proved`` lists ``[seconds, value]`` of each bound it raised."""
 
     def __init__(self, search, bracket: Bracket, budget: Budget, total: float) -> None:
         self.search, self.bracket, self.budget, self.total = search, bracket, budget, total
