@@ -295,21 +295,18 @@ def test_every_schedule_keeps_to_its_own_scaffold_scenario():
 @pytest.mark.slow
 def test_the_scaffold_scenarios_taken_further_never_exceed_the_optimum():
     # what anytime adds to the static bound's scaffold part (the search run on, each least
-    # scenario's program split by robot) against the brute force; it rises above the static
-    # bound on some of these, and one of them at least to the proved optimum
+    # scenario's program split by robot) against the brute force's proved optima; it rises above
+    # the static bound on some of these, and on one at least to the optimum
     from bille.instances.run import Budget
 
     raised, met = 0, 0
     for inst in MANY:
-        bounds = lower_bound(inst)
-        if bounds.scaffold is None:
+        ref = reference(inst, MANY_STATES)
+        bounds = lower_bound(inst) if ref.status == "optimal" else None
+        if bounds is None or bounds.scaffold is None:
             continue
         value = bounds.scaffold.advance(Budget().child(20), split=True)
-        ref = reference(inst, MANY_STATES)
-        if value is None or value <= bounds.lower:
-            continue
-        raised += 1
-        if ref.status == "optimal":
-            assert value <= ref.lower_bound, (inst.name, value, ref.lower_bound)
-            met += value == ref.lower_bound
-    assert raised >= 5 and met >= 1, (raised, met)
+        assert value is None or value <= ref.lower_bound, (inst.name, value, ref.lower_bound)
+        raised += value is not None and value > bounds.lower
+        met += value is not None and bounds.lower < value == ref.lower_bound
+    assert raised >= 3 and met >= 1, (raised, met)
