@@ -45,9 +45,11 @@ def check_bounds(instances, states: int = MAX_STATES) -> dict:
             assert not bounds.impossible, (inst.name, bounds.impossible)
             for part, value in bounds.parts.items():
                 assert value is None or value <= ref.lower_bound, (inst.name, part, value, ref.lower_bound)
-            # the routing program split by robot (an integer program: solved only where asked)
-            split = routing_bound(inst, EVERYWHERE, split=True)
+            # the routing program split by robot (an integer program, a fraction of a second on
+            # these): where the linear program is within a step of the bound, where it can bind
             routing = bounds.parts.get("routing (LP)")
+            near = routing is not None and routing >= bounds.lower - 1
+            split = routing_bound(inst, EVERYWHERE, split=True) if near else None
             if split is not None:
                 assert split <= ref.lower_bound, (inst.name, "routing split by robot", split, ref.lower_bound)
                 assert routing is None or split >= routing, (inst.name, split, routing)  # its relaxation is the LP
