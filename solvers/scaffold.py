@@ -55,17 +55,13 @@ from .routing import routing_bound
 SECONDS = 10.0  # at most, of the static bound's time: 2-8 s on lt-1..lt-5 (lt-8 needs 18 s)
 
 
-def scaffold_bound(instance: Instance, budget: Budget | None = None, floor: int = 0) -> int | None:
-    """The part of the module docstring (the larger of columns and rows), within ``budget`` (at
-    most :data:`SECONDS`); None where no line is a corridor line, no program is solved, or it
-    cannot exceed ``floor`` (the other parts' best): the scenario with scaffold in every corridor
-    line, whose value the part never exceeds, is tried first."""
-    return scaffold_search(instance, budget, floor).value
-
-
 def scaffold_search(instance: Instance, budget: Budget | None = None, floor: int = 0) -> Scenarios:
-    """:func:`scaffold_bound`'s search, as it stands when ``budget`` ran out: its ``value`` is the
-    part, and :meth:`Scenarios.advance` takes it further."""
+    """The search of the module docstring (columns and rows), as it stands when ``budget`` (at
+    most :data:`SECONDS`) ran out: its ``value`` is the part, the larger of the two kinds of line,
+    and :meth:`Scenarios.advance` takes it further. The value is None where no line is a
+    corridor line, no program is solved, or it cannot exceed ``floor`` (the other parts' best):
+    the scenario with scaffold in every corridor line, whose value the part never exceeds, is
+    tried first."""
     budget = (budget or Budget()).child(SECONDS)
     search = Scenarios([_Lines(instance, line, corridor) for line, corridor in corridor_lines(instance)])
     for lines in search.lines:

@@ -56,13 +56,14 @@ def test_kept_windows_shorten_where_they_can():
 
 class _Child:
     """The part of a background bound search that :class:`Ahead` reads: its horizon, the seconds
-    of the horizons it refuted, and restarts."""
+    of the horizons it refuted, and restarts (``bracket``: where proofs made elsewhere land)."""
 
-    def __init__(self, k, seconds):
-        self.k, self.seconds, self.restarts = k, seconds, 0
+    def __init__(self, k, seconds, bracket=None):
+        self.k, self.seconds, self.restarts, self.bracket = k, seconds, 0, bracket
 
-    def restart(self):
-        self.restarts += 1
+    def catch_up(self):
+        if self.k < self.bracket.lower:
+            self.restarts += 1
 
 
 def test_a_horizon_decided_ahead_of_the_bound_search():
@@ -72,7 +73,7 @@ def test_a_horizon_decided_ahead_of_the_bound_search():
     inst = make(".....\nTTTTT\n.....", [{"at": [0, 1]}], moveset="point", robot_goals=[[4, 1]])
     best = from_schedule(inst, sched("east east west east east east"), "detour")
     bracket = Bracket(lower=2, best=best)
-    child = _Child(2, {0: 0.001, 1: 0.001})  # refuted horizons 0 and 1, now on 2
+    child = _Child(2, {0: 0.001, 1: 0.001}, bracket)  # refuted horizons 0 and 1, now on 2
     ahead = Ahead(inst, "cpsat", bracket, child, Budget(60))
     assert ahead.pick()[0] == 5  # the highest below the best schedule's 6 steps
     ahead.run(*ahead.pick())

@@ -207,8 +207,7 @@ class _Anytime:
                     ahead.run(*pick)
                 elif scaffold is not None and scaffold.pending:  # no horizon worth deciding ahead
                     scaffold.run()
-                    if rise.k < bracket.lower:  # the child's horizon is refuted already: on from the bound
-                        rise.restart()
+                    rise.catch_up()
                 self.stats["bound_s"] += budget.now() - began
             rise.step(budget.child(0))  # what the bound search sent while the last part ran
         except KeyboardInterrupt:  # a second Ctrl-C, or a subscriber that raised it: keep what is held

@@ -99,10 +99,12 @@ class Background:
         self.k = self.bracket.lower
         self.child, self.inbox = _fork(_rise_child, self.instance, self.solver, self.k, self.budget)
 
-    def restart(self) -> None:
-        """Start again from the bracket's bound (a proof made elsewhere passed the child's horizon)."""
-        self.close()
-        self._start()
+    def catch_up(self) -> None:
+        """Start again from the bracket's bound if a proof made elsewhere passed the child's
+        horizon (it would only refute a horizon already refuted)."""
+        if self.k < self.bracket.lower:
+            self.close()
+            self._start()
 
     def step(self, part: Budget) -> None:
         """Read what the child sent, waiting for news until ``part`` expires (a cancelled run's
@@ -253,8 +255,7 @@ class Ahead:
             self.tried.append([h, answer, round(part.elapsed(), 3)])
         if answer == UNSAT:  # no schedule of h steps or fewer
             bracket.prove(h + 1)
-            if self.child.k <= h:
-                self.child.restart()
+            self.child.catch_up()
         elif answer == SAT:
             found = from_schedule(inst, Schedule.from_ids(inst, decode(model, inst, outcome.value)), "exact")
             if found is None:
