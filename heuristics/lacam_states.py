@@ -128,7 +128,6 @@ class StateSpace:
 
     def _ranked(self, state: State, i: int) -> list[tuple[int, frozenset]]:
         g, p = self.world.graphs[i], state.poses[i]
-        carrying = state.carrying[i]
         tiles = state.tiles
         must_go = tiles & ~self.goal_tiles
         must_fill = self.goal_tiles & ~tiles

@@ -1,7 +1,6 @@
 """Every rule of docs/rules.md: a correct case accepted, a broken one rejected with the right step,
 rule, robot and cells."""
 import numpy as np
-import pytest
 
 from bille.instances import State, Violation, apply
 from bille.solvers import validate

@@ -11,7 +11,7 @@ import click
 from bille.instances.bundled import bundled_path
 
 from ..common import EXIT_NO, EXIT_OK, instance_arg, output_folder
-from .args import counts as _counts, names as _names, stopped as _stopped
+from .args import counts as _counts, names as _names
 from .proof_commands import bench_cbs, bench_interrupt
 from .loop_schedules import bench_loop_schedules
 from .solving import bench_anytime, bench_gaps

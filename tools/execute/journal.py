@@ -264,7 +264,7 @@ def replay(path: str | Path, secret: bytes | None = None) -> Replayed:
             raise ExecutionError(f"{where}: a fault of step {step} after step {finished} finished")
         if kind == "finished" and (step != finished + 1 or step > released):
             raise ExecutionError(f"{where}: step {step} finished, but " + (
-                f"step {finished} was the last finished" if step != finished + 1 else f"it was never released"))
+                f"step {finished} was the last finished" if step != finished + 1 else "it was never released"))
         if kind == "released":
             released = step
         elif kind == "finished":
