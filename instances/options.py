@@ -107,7 +107,11 @@ def check_value(method: str, name: str, value: Any, hint, meta) -> None:
         if not isinstance(value, str):
             fail("a name")
     elif typing.get_origin(base) is list:
-        if not isinstance(value, list) or not all(isinstance(v, int) and not isinstance(v, bool) for v in value):
+        inner = typing.get_args(base)[0] if typing.get_args(base) else int
+        if typing.get_origin(inner) is list:  # a list of lists: cells as [x, y] pairs
+            if not isinstance(value, list) or not all(isinstance(v, list) and len(v) == 2 and _whole(v) for v in value):
+                fail("a list of [x, y] pairs of whole numbers")
+        elif not isinstance(value, list) or not _whole(value):
             fail("a list of whole numbers")
     elif isinstance(base, type) and not isinstance(value, base):
         fail(f"a {base.__name__}")
@@ -119,6 +123,10 @@ def check_value(method: str, name: str, value: Any, hint, meta) -> None:
             fail(f"a number above {meta['above']}")
         if meta.get("at_least") is not None and value < meta["at_least"]:
             fail(f"a number of at least {meta['at_least']}")
+
+
+def _whole(values) -> bool:
+    return all(isinstance(v, int) and not isinstance(v, bool) for v in values)
 
 
 def _is_union(hint) -> bool:
@@ -134,7 +142,8 @@ def _describe_type(hint) -> str:
         parts = [a for a in typing.get_args(hint) if a is not type(None)]
         return " or ".join(_describe_type(a) for a in parts) + " or none"
     if typing.get_origin(hint) is list:
-        return "list of int"
+        inner = typing.get_args(hint)[0] if typing.get_args(hint) else int
+        return "list of [x, y]" if typing.get_origin(inner) is list else "list of int"
     return getattr(hint, "__name__", str(hint))
 
 

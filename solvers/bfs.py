@@ -1,116 +1,157 @@
-"""Exhaustive breadth-first search over joint states: the reference solver for tiny instances.
+"""``bfs``: the exhaustive joint search, optimal with proof within a class of schedules.
 
-Every joint action of every reachable state is tried under the canonical rules, level by level,
-so the first goal state found has the optimal makespan, and an exhausted search proves that no
-schedule exists. Exponential in the number of robots: it is the yardstick the other solvers are
-tested against, not a planner.
+Breadth-first over joint states (every robot's pose and load, the tiles on the cells the class
+allows to change), compiled (:mod:`.joint.search`): the first goal state found gives the class's
+optimal makespan; a search that stops early has proved the class's optimum above the depth it
+finished. ``cells`` names the class (:mod:`.joint.cells`): ``all`` (the default) searches every
+schedule, so its optimum and its bound are the instance's; ``keep`` and ``no-scaffold`` search
+far fewer states and prove the optimum *of that class*, which the result names (``stats.class``
+and ``stats.objective``) and never gives as the instance's ``lower_bound``. ``add_cells`` widens
+a class by listed cells.
+
+With ``incumbent`` (a schedule known, ``bille solve --incumbent``), only schedules shorter than it
+are searched, with an admissible bound cutting states that cannot lead to one (:mod:`.joint.search`):
+an exhausted search proves the incumbent optimal (within the class, when it belongs to it).
+
+``engine=python`` runs the pure-Python twin (:mod:`.bfs_python`, every schedule only), the
+reference the compiled search is tested against.
+
+>>> from bille.instances import instance_from_text
+>>> inst = instance_from_text("grid: |\\n  TTT\\nmoveset: point\\nrobots: [{at: [0, 0]}]\\nrobot_goals: [[2, 0]]")
+>>> plan(inst).metrics.makespan
+2
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
-from itertools import product
 
-import numpy as np
-
-from bille.instances import Instance
-from bille.instances.limits import CHECK_EVERY
+from bille.instances import Instance, OptionError
+from bille.instances.limits import address_room, human, memory_budget
 from bille.instances.options import MethodOptions, option
-from bille.instances.rules import State, apply, goal_violation
 from bille.instances.result import Result
 from bille.instances.run import Run
-from bille.instances.schedule import Schedule
-from bille.instances.successors import candidate_actions, disjoint_products
+from bille.instances.schedule import Schedule, bind
+
+from .joint.cells import KINDS, Cells, cells_of
 
 
 @dataclass(frozen=True)
 class Options(MethodOptions):
-    """``max_steps``: horizon cap; without a goal within it the status is ``unsolved`` with
-    lower bound ``max_steps + 1``. ``max_states``: give up (status ``unsolved``) after storing
-    this many states."""
+    """``cells``: the class of schedules searched (``keep``: only the cells where the start and
+    the goal differ change; ``no-scaffold``: only cells where either has a tile; ``all``: every
+    schedule). ``add_cells``: ``[[x, y], ...]`` cells added to the class. ``incumbent``: a schedule
+    to search below. ``max_steps``: depth cap (none: until the goal, the time limit or the state
+    cap). ``max_states``: states stored at most (none: as many as fit in the memory allowed,
+    ``BILLE_MEMORY_GIB``). ``engine``: ``compiled``, or ``python`` for the reference twin
+    (every schedule only, no incumbent)."""
 
     METHOD = "bfs"
-    max_steps: int = option(64, at_least=0)
-    max_states: int = option(2_000_000, at_least=1)
+    cells: str = option("all", choices=KINDS)
+    add_cells: list[list[int]] | None = option(None)
+    incumbent: Schedule | None = option(None)
+    max_steps: int | None = option(None, at_least=0)
+    max_states: int | None = option(None, at_least=1)
+    engine: str = option("compiled", choices=("compiled", "python"))
+
+    def check(self) -> None:
+        if self.engine == "python" and (self.cells != "all" or self.add_cells or self.incumbent is not None):
+            raise OptionError("bfs: engine python searches every schedule from scratch; cells, add_cells and "
+                              "incumbent need engine compiled")
 
 
 def plan(instance: Instance, options: Options | None = None, run: Run | None = None) -> Result:
-    """Optimal-makespan schedule by breadth-first search (:class:`Options`); when the run's
-    budget expires, status ``timeout`` (no run: no limit). ``infeasible`` means the whole
-    reachable state space was exhausted.
+    """The optimum of the class ``options.cells`` with its proof (module docstring), or what was
+    proved when the run's budget, the state cap or the depth cap stopped the search.
 
-    Whenever it stops, every state within the depth reached has been checked, so the lower bound
-    it reports (that depth + 1) is proved. Interrupted (Ctrl-C), the level under way may not all
-    be checked: status ``interrupted`` with the depth reached as the bound.
-    """
+    Statuses: ``optimal`` (of the class: ``stats.objective`` names it unless the class is
+    ``all``); ``infeasible`` (``all`` exhausted: no schedule exists); ``feasible`` (the incumbent,
+    outside the class, and no shorter schedule in it); ``unsolved`` (a class without schedules
+    below the incumbent or at all, or a cap reached); ``timeout``; ``interrupted``. The bound a
+    stopped search proved is the result's ``lower_bound`` for ``all``, and ``stats.class.lower_bound``
+    for a class (``stats.restricted_lower_bound`` too, where the class is one of
+    :mod:`bille.solvers.classes`)."""
     options = options or Options()
-    max_steps, max_states = options.max_steps, options.max_states
-    budget = (run or Run()).budget.child()
-    world = instance.world
-    goal_tiles, goal_cells = instance.goal_tiles, instance.goal_cells
-    root = instance.start_state
-    parent: dict = {root.key(): None}
-    frontier = [root]
-    depth, expanded, truncated = 0, 0, False
+    run = run or Run()
+    if options.engine == "python":
+        from . import bfs_python
 
-    def stats(failure=None):
-        out = {"expanded": expanded, "states": len(parent), "depth": depth}
-        return out if failure is None else {**out, "failure": failure}
+        return bfs_python.plan(instance, options, run)
+    from .joint.search import bytes_per_state, search
+    from .joint.tables import compile_tables
 
-    def stopped() -> Result | None:
-        """The run's end if out of time or states; every state within ``depth`` steps has been
-        checked (the goal test of each level), so the optimum is larger than ``depth``."""
-        out_of_time = budget.expired()
-        if not out_of_time and len(parent) <= max_states:
-            return None
-        return Result("bfs", "timeout" if out_of_time else "unsolved", lower_bound=depth + 1,
-                      stats=stats("time limit" if out_of_time else "state cap"),
-                      time_s=budget.elapsed())
+    budget = run.budget.child()
+    cells = cells_of(instance, options.cells, options.add_cells or ())
+    tables = compile_tables(instance, cells)
+    upper, incumbent = None, None
+    if options.incumbent is not None:
+        incumbent = bind(instance, options.incumbent)
+        from .validate import validate
 
-    try:
-        while frontier:
-            for n, s in enumerate(frontier, 1):
-                if n % CHECK_EVERY == 0 and budget.expired():  # levels below this one were checked
-                    return Result("bfs", "timeout", lower_bound=depth, stats=stats("time limit"),
-                                  time_s=budget.elapsed())
-                if goal_violation(world, s, goal_tiles, goal_cells, depth) is None:
-                    schedule = _unwind(instance, parent, s)
-                    return Result("bfs", "optimal", schedule, lower_bound=depth, stats=stats(),
-                                  time_s=budget.elapsed())
-            if depth == max_steps:
-                truncated = True
-                break
-            nxt = []
-            for s in frontier:
-                if (end := stopped()) is not None:
-                    return end
-                expanded += 1
-                options = [candidate_actions(instance, s, i) for i in range(instance.num_robots)]
-                joints = product(*options) if world.classic else disjoint_products(instance, s, options)
-                for n, joint in enumerate(joints, 1):
-                    if n % CHECK_EVERY == 0 and (end := stopped()) is not None:
-                        return end  # many robots: one state has millions of joint actions
-                    new = apply(world, s, joint)
-                    if isinstance(new, State):
-                        key = new.key()
-                        if key not in parent:
-                            parent[key] = (s.key(), joint)
-                            nxt.append(new)
-            frontier = nxt
-            depth += 1
-    except KeyboardInterrupt:  # every level above the one under way was checked: a proved bound
-        return Result("bfs", "interrupted", lower_bound=depth, stats=stats("interrupted"),
-                      time_s=budget.elapsed())
-    if truncated:  # no goal within max_steps
-        return Result("bfs", "unsolved", lower_bound=max_steps + 1, stats=stats("step bound"),
-                      time_s=budget.elapsed())
-    return Result("bfs", "infeasible", stats=stats(), time_s=budget.elapsed())
+        report = validate(instance, options.incumbent)
+        if not report.valid:
+            raise OptionError(f"bfs: the incumbent is no valid schedule: {report.violation}")
+        upper = report.metrics.makespan
+    per = bytes_per_state(tables)
+    room = min(memory_budget(), address_room())
+    cap = int(room // per)
+    max_states = options.max_states or cap
+    if max_states > cap:
+        raise OptionError(f"bfs: max_states {max_states:,} needs about {human(max_states * per)}, more than the "
+                          f"{human(room)} this machine allows (BILLE_MEMORY_GIB sets it)")
+    out = search(instance, cells, budget, U=upper, max_states=max_states, max_steps=options.max_steps,
+                 events=run.events, tables=tables)
+    return _result(instance, cells, out, upper, incumbent, options, budget)
 
 
-def _unwind(instance: Instance, parent: dict, state: State) -> Schedule:
-    steps = []
-    key = state.key()
-    while parent[key] is not None:
-        key, joint = parent[key]
-        steps.append(joint)
-    ids = np.array(steps[::-1], dtype=np.int64).T.reshape(instance.num_robots, len(steps))
-    return Schedule.from_ids(instance, ids, meta={"method": "bfs"})
+def _result(instance: Instance, cells: Cells, out, upper, incumbent, options: Options, budget) -> Result:
+    """The search's outcome as a result whose claim names its class (module docstring)."""
+    stats = {**out.stats(), "class": {**cells.to_json(), "lower_bound": None}}
+    whole = cells.unconditional
+    if not whole:
+        stats["objective"] = f"makespan among {cells.name} (cells={cells.key})"
+        flag = {"keep": "keep_structure", "no-scaffold": "no_scaffold"}.get(cells.kind)
+        if flag is not None:  # a bound on a class holds for every class within it (solvers.classes)
+            stats[flag] = True
+    schedule, status, proved = None, None, out.proved
+    if out.stop == "goal":
+        schedule = Schedule.from_ids(instance, out.ids, meta={"method": "bfs"})
+        status = "optimal"
+    elif out.stop == "exhausted" and upper is not None:  # nothing shorter than the incumbent
+        schedule = Schedule.from_ids(instance, incumbent, meta={"method": "bfs"})
+        member = whole or _member(instance, cells, incumbent)
+        status = "optimal" if member else "feasible"
+        if not member:
+            stats["failure"] = f"no schedule among {cells.name} is shorter than the incumbent's {upper} steps"
+    elif out.stop == "exhausted":
+        status = "infeasible" if whole else "unsolved"
+        if not whole:
+            stats["failure"] = f"no schedule among {cells.name} exists"
+            proved = None
+    else:
+        failure = {"time": "time limit", "cancelled": "cancelled", "states": f"state cap ({out.states:,} states)",
+                   "steps": "step bound"}[out.stop]
+        stats["failure"] = failure
+        status = {"time": "timeout", "cancelled": "interrupted"}.get(out.stop, "unsolved")
+        if upper is not None:
+            schedule = Schedule.from_ids(instance, incumbent, meta={"method": "bfs"})
+            status = "interrupted" if out.stop == "cancelled" else "feasible"
+        which = "every schedule" if whole else cells.name
+        stats["stopped"] = f"stopped at {out.states:,} states at depth {out.depth}: makespan >= {proved} among {which}"
+    if status == "infeasible":
+        proved = None
+    stats["class"]["lower_bound"] = proved
+    if not whole and proved is not None:
+        stats["restricted_lower_bound"] = proved
+    lower = proved if whole else None
+    if whole and status == "optimal" and schedule is not None and upper is not None and out.stop == "exhausted":
+        lower = upper
+    return Result("bfs", status, schedule, lower_bound=lower, stats=stats, time_s=budget.elapsed())
+
+
+def _member(instance: Instance, cells: Cells, ids) -> bool:
+    """Whether a valid schedule changes no cell outside the class."""
+    from .classes import tiles_over_time
+
+    tiles = tiles_over_time(instance, ids)
+    start = instance.start.tiles
+    return all(not ((t != start) & ~cells.mask).any() for t in tiles)

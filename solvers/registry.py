@@ -182,8 +182,10 @@ METHODS = Registry([
            "the makespan's lower bound; optimal when the two meet (the certified gap otherwise)",
            bound=True, time_limit=60.0, limit_required=True),
     Method("bfs", "bille.solvers.bfs:plan", "bille.solvers.bfs:Options",
-           "least makespan by breadth-first search over joint states (tiny instances)", "optimal makespan",
-           classic=True),
+           "least makespan by a compiled breadth-first search over joint states, over every schedule or a class "
+           "(cells=keep|no-scaffold|all, add_cells); see docs/exact.md",
+           "optimal makespan of the class searched; a bound of the class when it stops early",
+           classic=True, time_limit=60.0),
 ])
 
 CLASSIC = tuple(name for name, record in METHODS.items() if record.classic)  # docs/rules.md

@@ -1,0 +1,1 @@
+"""The exhaustive joint-state search, compiled: classes of schedules by the cells allowed to change."""

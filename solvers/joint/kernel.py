@@ -1,0 +1,452 @@
+"""The compiled successor function and layered breadth-first search over packed joint states.
+
+A joint state is a row of ``L`` machine words (int64): first the robots, each ``pose * 2 +
+carrying`` in ``rbits`` bits, ``rpw`` to a word; then the tiles on the cells allowed to change,
+one bit each, 63 to a word (the other cells keep their start's tiles, :mod:`.tables`). The
+successors of a state are its joint actions under docs/rules.md, "One time step", built by
+backtracking over the robots from the compiled pose tables (:mod:`bille.instances.posegraph`),
+the same tables :func:`bille.instances.rules.apply` reads:
+
+1. precondition, 2. workspace and 4. support per robot (:func:`_candidates`; a robot's new feet
+   cannot be picked from under it nor placed on by another in the same step without a collision,
+   so the tiles before the step decide rule 4, as in :func:`bille.instances.successors.candidate_actions`);
+3. collision while choosing each robot's action (:func:`_fits`): disjoint collision sets, or the
+   classic convention (vertex, swap, exclusive pick/place targets);
+5. connectivity of the new tiles at the leaf (:func:`_connected`).
+
+The search keeps every state found in ``states`` (a layer is a range of rows), a parent index per
+state, and an open-addressing hash table of row numbers + 1. :func:`expand` works through a range
+of rows and stops after ``work`` steps of the backtracking, keeping its place in ``cursor`` so
+the caller can look at its budget between calls and go on; it also stops when the table is half
+full (the caller doubles it, :func:`rehash`) or the rows run out.
+
+The same function, with ``mode`` :data:`FIND` or :data:`COLLECT`, matches a given successor (to
+rebuild a schedule) or lists every successor (the parity test against the Python rules).
+
+Robots listed in one symmetry group (same moveset, no goal cell) are interchangeable: a joint
+state is stored with their values sorted (:mod:`.search` proves this keeps the search exact).
+
+``dist[i, pose]`` is a lower bound on the steps robot ``i`` needs from ``pose`` to its goal
+cell, and ``U`` an upper bound to search below: a state at depth ``g`` with ``g + h >= U`` is
+not stored (:mod:`.search` proves ``h`` admissible).
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+WAIT, MOTION, PICK, PLACE = 0, 1, 2, 3  # bille.instances.moveset.Kind
+SEARCH, FIND, COLLECT = 0, 1, 2  # modes of expand
+DONE, GOAL, PAUSED, FULL, GROW = 0, 1, 2, 3, 4  # what expand returns
+# counters[]: states stored, entries in the hash table, goal row, leaves (joint actions valid)
+N_STATES, N_TABLE, GOAL_ROW, LEAVES, PRUNED = 0, 1, 2, 3, 4
+TILE_BITS = 63
+
+
+def _compiled(function):
+    """``function`` compiled, its machine code cached on disk where Numba finds a writable place."""
+    try:
+        return njit(cache=True)(function)
+    except RuntimeError:  # Numba: "cannot cache function ...: no locator available"
+        return njit(function)
+
+
+@_compiled
+def hash_row(row):  # pragma: no cover - compiled
+    h = np.int64(-7046029254386353131)
+    for w in row:
+        h ^= w
+        h *= np.int64(-7046029254386353131)
+        h ^= (h >> np.int64(31)) & np.int64(0x1FFFFFFFF)
+    return h
+
+
+@_compiled
+def _same(states, r, row):  # pragma: no cover - compiled
+    for k in range(row.shape[0]):
+        if states[r, k] != row[k]:
+            return False
+    return True
+
+
+@_compiled
+def lookup(states, table, row):  # pragma: no cover - compiled
+    """The slot of ``row`` in ``table``: its entry if stored, else the empty slot where it goes."""
+    mask = table.shape[0] - 1
+    slot = hash_row(row) & mask
+    while True:
+        e = table[slot]
+        if e == 0 or _same(states, e - 1, row):
+            return slot
+        slot = (slot + 1) & mask
+
+
+@_compiled
+def rehash(states, n, size):  # pragma: no cover - compiled
+    """A table of ``size`` slots (a power of two) holding rows ``0..n-1``."""
+    table = np.zeros(size, dtype=np.int64)
+    mask = size - 1
+    for r in range(n):
+        slot = hash_row(states[r]) & mask
+        while table[slot] != 0:
+            slot = (slot + 1) & mask
+        table[slot] = r + 1
+    return table
+
+
+@_compiled
+def _popcount(w):  # pragma: no cover - compiled
+    c = 0
+    while w != 0:
+        w &= w - 1
+        c += 1
+    return c
+
+
+@_compiled
+def _connected(tiles, width, height, total, anchor, stack, seen, stamp):  # pragma: no cover - compiled
+    """Whether the ``total`` tiles of ``tiles`` form one 4-connected piece (flood from ``anchor``)."""
+    if total == 0:
+        return False
+    if tiles[anchor] == 0:
+        anchor = -1
+        for c in range(tiles.shape[0]):
+            if tiles[c] != 0:
+                anchor = c
+                break
+    top = 0
+    stack[0] = anchor
+    seen[anchor] = stamp
+    count = 1
+    while top >= 0:
+        c = stack[top]
+        top -= 1
+        x = c % width
+        y = c // width
+        for d in range(4):
+            nx, ny = x, y
+            if d == 0:
+                ny = y - 1
+            elif d == 1:
+                nx = x + 1
+            elif d == 2:
+                ny = y + 1
+            else:
+                nx = x - 1
+            if nx < 0 or ny < 0 or nx >= width or ny >= height:
+                continue
+            nc = ny * width + nx
+            if tiles[nc] != 0 and seen[nc] != stamp:
+                seen[nc] = stamp
+                count += 1
+                top += 1
+                stack[top] = nc
+    return count == total
+
+
+@_compiled
+def _fits(i, a, g, p, c, classic, coll, carry, succ, target, occ, endocc, startocc, tgt, after):  # pragma: no cover
+    """Whether robot ``i``'s action ``a`` is free of collisions with the robots chosen before it
+    (rule 3, or the classic convention); marks its cells if so."""
+    if classic:
+        v = succ[g, p, a]
+        t = target[g, p, a]
+        if endocc[v] != 0:
+            return False
+        j = startocc[v] - 1
+        if j >= 0 and j < i and after[j] == p:
+            return False
+        if tgt[p] != 0 or tgt[v] != 0:
+            return False
+        if t >= 0 and (startocc[t] != 0 or endocc[t] != 0 or tgt[t] != 0):
+            return False
+        endocc[v] = i + 1
+        if t >= 0:
+            tgt[t] = i + 1
+        after[i] = v
+        return True
+    for k in range(coll.shape[3]):
+        cell = coll[g, p, a, k]
+        if cell >= 0 and occ[cell] != 0 and occ[cell] != i + 1:
+            return False
+    if c:
+        for k in range(carry.shape[3]):
+            cell = carry[g, p, a, k]
+            if cell >= 0 and occ[cell] != 0 and occ[cell] != i + 1:
+                return False
+    for k in range(coll.shape[3]):
+        cell = coll[g, p, a, k]
+        if cell >= 0:
+            occ[cell] = i + 1
+    if c:
+        for k in range(carry.shape[3]):
+            cell = carry[g, p, a, k]
+            if cell >= 0:
+                occ[cell] = i + 1
+    after[i] = succ[g, p, a]
+    return True
+
+
+@_compiled
+def _unmark(i, a, g, p, c, classic, coll, carry, succ, target, occ, endocc, tgt):  # pragma: no cover
+    if classic:
+        endocc[succ[g, p, a]] = 0
+        t = target[g, p, a]
+        if t >= 0:
+            tgt[t] = 0
+        return
+    for k in range(coll.shape[3]):
+        cell = coll[g, p, a, k]
+        if cell >= 0 and occ[cell] == i + 1:
+            occ[cell] = 0
+    if c:
+        for k in range(carry.shape[3]):
+            cell = carry[g, p, a, k]
+            if cell >= 0 and occ[cell] == i + 1:
+                occ[cell] = 0
+
+
+@_compiled
+def expand(mode, states, parent, table, counters, cursor, hi, work, max_rows, depth, U,
+           # the instance's tables (.tables.Tables)
+           m, rbits, rpw, nR, nT, width, height, classic, gid, succ, coll, carry, carry_ok, need, target, kind,
+           bit_of, cell_of, fixed, fixed_count, anchor, goal_words, dist, sym_start, sym_idx,
+           # scratch, allocated once by the caller
+           tiles, occ, endocc, startocc, tgt, cand, ncand, choice, pose, carrying, after, vals, row, seen, stack,
+           stamp,
+           # FIND: the successor to match (its canonical row) and where its joint action goes;
+           # COLLECT: rows and joint actions of every successor (raw, not canonical)
+           match, out_actions, out_rows):  # pragma: no cover - compiled
+    L = nR + nT
+    rmask = (np.int64(1) << np.int64(rbits)) - 1
+    big = U < (1 << 40)
+    pos = cursor[0]
+    steps = 0
+    while pos < hi:
+        # ---- the state at row pos: robots, tiles, each robot's candidate actions ----------------
+        src = states[pos]
+        for i in range(m):
+            v = (src[i // rpw] >> np.int64((i % rpw) * rbits)) & rmask
+            pose[i] = v >> 1
+            carrying[i] = v & 1
+        for b in range(cell_of.shape[0]):
+            tiles[cell_of[b]] = (src[nR + b // TILE_BITS] >> np.int64(b % TILE_BITS)) & 1
+        dead = False
+        for i in range(m):
+            g = gid[i]
+            p = pose[i]
+            c = carrying[i]
+            n = 0
+            for a in range(kind.shape[1]):
+                s = succ[g, p, a]
+                if s < 0 or (c == 1 and not carry_ok[g, p, a]):
+                    continue
+                k = kind[g, a]
+                t = target[g, p, a]
+                if k == PICK:
+                    if c == 1 or t < 0 or tiles[t] == 0 or bit_of[t] < 0:
+                        continue
+                    load = 1
+                elif k == PLACE:
+                    if c == 0 or t < 0 or tiles[t] == 1 or bit_of[t] < 0:
+                        continue
+                    load = 0
+                else:
+                    if tiles[need[g, p, a, 0]] == 0 or tiles[need[g, p, a, 1]] == 0:
+                        continue
+                    load = c
+                if big and depth + 1 + dist[i, s] + load >= U:
+                    continue
+                cand[i, n] = a
+                n += 1
+            ncand[i] = n
+            if n == 0:
+                dead = True
+        if dead:  # a robot with nothing to do: no successor
+            cursor[2] = 0
+            pos += 1
+            continue
+        if classic:
+            for i in range(m):
+                startocc[pose[i]] = i + 1
+        if cursor[2] == 1:  # resuming inside this state: mark the robots chosen so far again
+            level = cursor[1]
+            for i in range(level + 1):
+                if choice[i] >= 0:
+                    _fits(i, cand[i, choice[i]], gid[i], pose[i], carrying[i], classic, coll, carry, succ, target,
+                          occ, endocc, startocc, tgt, after)
+        else:
+            level = 0
+            choice[0] = -1
+        # ---- backtracking over the robots' candidates (rule 3 as they are chosen) ---------------
+        while level >= 0:
+            if steps >= work or counters[N_STATES] >= max_rows or 2 * counters[N_TABLE] >= table.shape[0]:
+                for i in range(level + 1):  # unmark: the caller may grow the table, then resume here
+                    if choice[i] >= 0:
+                        _unmark(i, cand[i, choice[i]], gid[i], pose[i], carrying[i], classic, coll, carry, succ,
+                                target, occ, endocc, tgt)
+                if classic:
+                    for i in range(m):
+                        startocc[pose[i]] = 0
+                cursor[0] = pos
+                cursor[1] = level
+                cursor[2] = 1
+                if counters[N_STATES] >= max_rows:
+                    return FULL
+                if 2 * counters[N_TABLE] >= table.shape[0]:
+                    return GROW
+                return PAUSED
+            steps += 1
+            g = gid[level]
+            if choice[level] >= 0:
+                _unmark(level, cand[level, choice[level]], g, pose[level], carrying[level], classic, coll, carry,
+                        succ, target, occ, endocc, tgt)
+            choice[level] += 1
+            ok = False
+            while choice[level] < ncand[level]:
+                if _fits(level, cand[level, choice[level]], g, pose[level], carrying[level], classic, coll, carry,
+                         succ, target, occ, endocc, startocc, tgt, after):
+                    ok = True
+                    break
+                choice[level] += 1
+            if not ok:
+                choice[level] = -1
+                level -= 1
+                continue
+            if level < m - 1:
+                level += 1
+                choice[level] = -1
+                continue
+            # ---- a leaf: one joint action, rules 1-4 hold; the new tiles, rule 5 ---------------
+            for k in range(L):
+                row[k] = 0
+            for k in range(nT):
+                row[nR + k] = src[nR + k]
+            changed = False
+            for i in range(m):
+                gi = gid[i]
+                a = cand[i, choice[i]]
+                k = kind[gi, a]
+                load = carrying[i]
+                if k == PICK or k == PLACE:
+                    b = bit_of[target[gi, pose[i], a]]
+                    bit = np.int64(1) << np.int64(b % TILE_BITS)
+                    if k == PICK:
+                        row[nR + b // TILE_BITS] &= ~bit
+                        load = 1
+                    else:
+                        row[nR + b // TILE_BITS] |= bit
+                        load = 0
+                    changed = True
+                vals[i] = 2 * np.int64(succ[gi, pose[i], a]) + load
+            if changed:
+                total = fixed_count
+                for k in range(nT):
+                    total += _popcount(row[nR + k])
+                for b in range(cell_of.shape[0]):
+                    tiles[cell_of[b]] = (row[nR + b // TILE_BITS] >> np.int64(b % TILE_BITS)) & 1
+                stamp[0] += 1
+                connected = _connected(tiles, width, height, total, anchor, stack, seen, stamp[0])
+                for b in range(cell_of.shape[0]):
+                    tiles[cell_of[b]] = (src[nR + b // TILE_BITS] >> np.int64(b % TILE_BITS)) & 1
+                if not connected:
+                    continue
+            counters[LEAVES] += 1
+            if mode == COLLECT:
+                r = counters[N_STATES]
+                if r < out_rows.shape[0]:
+                    for i in range(m):
+                        out_actions[r, i] = cand[i, choice[i]]
+                    for i in range(m):
+                        w = i // rpw
+                        out_rows[r, w] |= vals[i] << np.int64((i % rpw) * rbits)
+                    for k in range(nT):
+                        out_rows[r, nR + k] = row[nR + k]
+                counters[N_STATES] = r + 1
+                continue
+            # the admissible bound of the new state (.search): each robot's walk and load, the tiles
+            h = 0
+            if big:
+                for i in range(m):
+                    e = dist[i, vals[i] >> 1] + (vals[i] & 1)
+                    if e > h:
+                        h = e
+                mis = 0
+                for k in range(nT):
+                    mis += _popcount(row[nR + k] ^ goal_words[k])
+                e = (mis + m - 1) // m if m > 0 else 0
+                if e > h:
+                    h = e
+                if depth + 1 + h >= U:
+                    counters[PRUNED] += 1
+                    continue
+            # the robots of a symmetry group in sorted order (raw order kept in vals for FIND)
+            for s in range(sym_start.shape[0] - 1):
+                for x in range(sym_start[s] + 1, sym_start[s + 1]):
+                    for y in range(x, sym_start[s], -1):
+                        ia = sym_idx[y - 1]
+                        ib = sym_idx[y]
+                        if vals[ia] > vals[ib]:
+                            tmp = vals[ia]
+                            vals[ia] = vals[ib]
+                            vals[ib] = tmp
+                        else:
+                            break
+            for i in range(m):
+                row[i // rpw] |= vals[i] << np.int64((i % rpw) * rbits)
+            if mode == FIND:
+                same = True
+                for k in range(L):
+                    if row[k] != match[k]:
+                        same = False
+                        break
+                if same:
+                    for i in range(m):
+                        out_actions[0, i] = cand[i, choice[i]]
+                    for i in range(level + 1):
+                        if choice[i] >= 0:
+                            _unmark(i, cand[i, choice[i]], gid[i], pose[i], carrying[i], classic, coll, carry, succ,
+                                    target, occ, endocc, tgt)
+                    if classic:
+                        for i in range(m):
+                            startocc[pose[i]] = 0
+                    return GOAL
+                continue
+            slot = lookup(states, table, row)
+            if table[slot] != 0:
+                continue
+            r = counters[N_STATES]
+            for k in range(L):
+                states[r, k] = row[k]
+            parent[r] = pos
+            table[slot] = r + 1
+            counters[N_STATES] = r + 1
+            counters[N_TABLE] += 1
+            goal = True
+            for k in range(nT):
+                if row[nR + k] != goal_words[k]:
+                    goal = False
+            if goal:
+                for i in range(m):
+                    if (vals[i] & 1) != 0 or dist[i, vals[i] >> 1] != 0:
+                        goal = False
+                        break
+            if goal:
+                counters[GOAL_ROW] = r
+                for i in range(level + 1):
+                    if choice[i] >= 0:
+                        _unmark(i, cand[i, choice[i]], gid[i], pose[i], carrying[i], classic, coll, carry, succ,
+                                target, occ, endocc, tgt)
+                if classic:
+                    for i in range(m):
+                        startocc[pose[i]] = 0
+                cursor[0] = pos + 1
+                cursor[2] = 0
+                return GOAL
+        if classic:
+            for i in range(m):
+                startocc[pose[i]] = 0
+        cursor[2] = 0
+        pos += 1
+    cursor[0] = pos
+    return DONE

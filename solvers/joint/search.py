@@ -1,0 +1,207 @@
+"""Layered breadth-first search over the joint states of one class of schedules, compiled.
+
+:func:`search` stores every joint state reached (robots' poses and loads, the tiles on the cells
+the class allows to change; :mod:`.kernel`) once, layer by layer, and stops at the first goal
+state: its depth is the class's optimum, and the parent links give a schedule of that makespan.
+
+**Why it is exact.** Layer ``d`` holds every state reachable in ``d`` steps by a schedule of the
+class and in no fewer (each state is stored at its first, least depth; a state met again is
+dropped, since what can follow it does not depend on how it was reached). Every state is tested
+for the goal when it is stored, so when layer ``d + 1`` is being built, no schedule of the class
+has a makespan of ``d`` or less: a search stopped there (time, Ctrl-C, the state cap) has proved
+the class's optimum is at least ``d + 1``; an exhausted search proves the class has no schedule.
+
+**Pruning below an upper bound** ``U`` (a schedule known, of makespan ``U``). A state at depth
+``g`` is dropped when ``g + h >= U``, with
+
+    ``h = max( max_i ( dist_i(pose_i) + carrying_i ),  ceil(mismatch / m) )``
+
+``dist_i`` (:func:`.tables._distances`) counts the motions robot ``i`` needs to reach a pose with
+its front foot on its goal cell, over the moves whose new feet are on cells that may hold a tile
+in the class (rule 4 puts every foot on a tile, and no other cell ever holds one); a robot that
+carries must besides place its tile, a step without motion; ``mismatch`` counts the cells
+allowed to change whose tile differs from the goal's, and each needs a pick or a place, at most
+one per robot and step. Each term is at most the steps left in any schedule from the state, so
+a dropped state starts no schedule shorter than ``U``. The first occurrence of a state has the
+least ``g``, so dropping it loses no shorter occurrence. An exhausted search then proves that
+no schedule of the class is shorter than ``U``; stopped early, that none is shorter than
+``min(d + 1, U)``.
+
+**Interchangeable robots.** Robots with one moveset and no goal cell are stored in sorted order
+of their values (pose and load). Swapping two such robots maps the schedules from a state onto
+the schedules from the swapped state, action for action, with the same makespan (the rules and
+the goal treat them alike), so one representative of each set of states decides them all. The
+schedule is rebuilt by replaying the path forward from the start with the robots' own
+identities (:func:`_unwind`), each step checked by :func:`bille.instances.rules.apply`.
+
+Checked against the Python reference search (:mod:`bille.solvers.bfs`, ``engine=python``) and
+the CP-SAT model on tiny instances, and the successors against the Python rules on random
+states (tests/test_joint.py).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from bille.instances import Instance
+from bille.instances.rules import State, apply
+from bille.instances.run import Budget, Events
+
+from . import kernel
+from .cells import Cells
+from .tables import Tables, compile_tables
+
+NO_BOUND = 1 << 62
+WORK = 1 << 16  # backtracking steps between two looks at the budget (well under a millisecond)
+TABLE_START = 1 << 12
+
+
+@dataclass
+class Outcome:
+    """How a search ended. ``stop``: ``goal`` (``ids``: a schedule of the class's optimum,
+    ``[m, T]`` action ids), ``exhausted`` (no schedule of the class below ``U``, or none at all
+    without ``U``), ``time``, ``cancelled``, ``states`` (the state cap), ``steps`` (the depth
+    cap). ``proved``: no schedule of the class has a makespan below it (module docstring)."""
+
+    stop: str
+    proved: int
+    ids: np.ndarray | None = None
+    depth: int = 0
+    states: int = 0
+    leaves: int = 0
+    pruned: int = 0
+    layers: list = field(default_factory=list)
+
+    def stats(self) -> dict:
+        return {"states": self.states, "depth": self.depth, "joint_actions": self.leaves, "pruned": self.pruned}
+
+
+def bytes_per_state(tables: Tables) -> int:
+    """Memory one stored state takes at most: its words, its parent, and its share of the hash
+    table (at most a quarter full after doubling, 8 bytes a slot)."""
+    return 8 * tables.L + 8 + 32
+
+
+def search(instance: Instance, cells: Cells, budget: Budget, *, U: int | None = None, max_states: int,
+           max_steps: int | None = None, events: Events | None = None, tables: Tables | None = None) -> Outcome:
+    """Breadth-first search within ``cells`` below ``U`` (module docstring); ``budget`` polled
+    within layers, ``max_states`` stored states at most, ``max_steps`` layers at most."""
+    t = tables or compile_tables(instance, cells)
+    bound = NO_BOUND if U is None else int(U)
+    root = instance.start_state
+    row = t.pack(root)
+    if t.is_goal(row):
+        return Outcome("goal", 0, ids=np.zeros((instance.num_robots, 0), dtype=np.int64), states=1)
+    if bound <= 0:
+        return Outcome("exhausted", bound, states=1)
+    L, m = t.L, t.m
+    n = instance.width * instance.height
+    A = t.kind.shape[1]
+    rows = max(2, int(max_states))
+    states = np.zeros((rows, L), dtype=np.int64)  # pages are touched only as states are stored
+    parent = np.zeros(rows, dtype=np.int64)
+    states[0] = row
+    table = kernel.rehash(states, 1, TABLE_START)
+    counters = np.zeros(5, dtype=np.int64)
+    counters[kernel.N_STATES] = counters[kernel.N_TABLE] = 1
+    scratch = _scratch(t, n, A, m, L)
+    lo, hi, depth = 0, 1, 0
+    out = Outcome("time", 1)
+    while True:
+        proved = min(depth + 1, bound)
+        if max_steps is not None and depth >= max_steps:
+            return _ended(out, "steps", proved, depth, counters)
+        cursor = np.zeros(3, dtype=np.int64)
+        cursor[0] = lo
+        while True:
+            got = kernel.expand(kernel.SEARCH, states, parent, table, counters, cursor, hi, WORK, rows, depth, bound,
+                                *t.args(), *scratch, row, np.zeros((1, max(m, 1)), np.int64),
+                                np.zeros((1, L), np.int64))
+            if got == kernel.GOAL:
+                out = _ended(out, "goal", depth + 1, depth + 1, counters)
+                out.ids = _unwind(instance, t, states, parent, int(counters[kernel.GOAL_ROW]), scratch)
+                return out
+            if got == kernel.GROW:
+                table = kernel.rehash(states, int(counters[kernel.N_STATES]), 2 * table.shape[0])
+                continue
+            if got == kernel.FULL:
+                return _ended(out, "states", proved, depth, counters)
+            if got == kernel.PAUSED:
+                if budget.expired():
+                    return _ended(out, "cancelled" if budget.cancelled else "time", proved, depth, counters)
+                continue
+            break
+        lo, hi = hi, int(counters[kernel.N_STATES])
+        depth += 1
+        out.layers.append(hi - lo)
+        if events is not None:
+            events.progress({"class": cells.key, "depth": depth, "states": hi, "layer": hi - lo,
+                             "lower": min(depth + 1, bound), "best": U, "elapsed": budget.elapsed()})
+        if lo == hi:
+            return _ended(out, "exhausted", bound if U is not None else math.inf, depth, counters)
+
+
+def _ended(out: Outcome, stop: str, proved, depth: int, counters: np.ndarray) -> Outcome:
+    out.stop, out.proved, out.depth = stop, proved, depth
+    out.states = int(counters[kernel.N_STATES])
+    out.leaves = int(counters[kernel.LEAVES])
+    out.pruned = int(counters[kernel.PRUNED])
+    return out
+
+
+def _scratch(t: Tables, n: int, A: int, m: int, L: int) -> tuple:
+    """The kernel's working arrays (in its order), allocated once per search."""
+    mm = max(m, 1)
+    tiles = np.zeros(n, np.uint8)
+    tiles[:] = t.fixed
+    return (tiles, np.zeros(n, np.int64), np.zeros(n, np.int64), np.zeros(n, np.int64), np.zeros(n, np.int64),
+            np.zeros((mm, A), np.int64), np.zeros(mm, np.int64), np.full(mm, -1, np.int64), np.zeros(mm, np.int64),
+            np.zeros(mm, np.int64), np.zeros(mm, np.int64), np.zeros(mm, np.int64), np.zeros(L, np.int64),
+            np.zeros(n, np.int64), np.zeros(n, np.int64), np.zeros(1, np.int64))
+
+
+def successors(t: Tables, n: int, row: np.ndarray, cap: int = 1 << 16) -> tuple[np.ndarray, np.ndarray]:
+    """Every valid joint action of the state ``row`` and the raw (unsorted) state it leads to,
+    as ``(actions[k, m], rows[k, L])`` (the parity test's view of the kernel)."""
+    m, L, A = t.m, t.L, t.kind.shape[1]
+    scratch = _scratch(t, n, A, m, L)
+    scratch[-1][0] = 0
+    actions = np.zeros((cap, max(m, 1)), np.int64)
+    rows = np.zeros((cap, L), np.int64)
+    counters = np.zeros(5, np.int64)
+    kernel.expand(kernel.COLLECT, row[None, :].copy(), np.zeros(1, np.int64), np.zeros(2, np.int64), counters,
+                  np.zeros(3, np.int64), 1, NO_BOUND, NO_BOUND, 0, NO_BOUND, *t.args(), *scratch, row.copy(),
+                  actions, rows)
+    k = int(counters[kernel.N_STATES])
+    if k > cap:
+        raise ValueError(f"more than {cap} successors")
+    return actions[:k, :m], rows[:k]
+
+
+def _unwind(instance: Instance, t: Tables, states, parent, goal_row: int, scratch) -> np.ndarray:
+    """The schedule to the state at ``goal_row``: the path of stored (sorted) states, replayed
+    forward from the start with each robot's own identity (module docstring)."""
+    path = [goal_row]
+    while path[-1] != 0:
+        path.append(int(parent[path[-1]]))
+    path.reverse()
+    state = instance.start_state
+    m, L = t.m, t.L
+    steps = []
+    for r in path[1:]:
+        raw = t.pack(state, canonical=False)[None, :]
+        actions = np.zeros((1, max(m, 1)), np.int64)
+        got = kernel.expand(kernel.FIND, raw, np.zeros(1, np.int64), np.zeros(2, np.int64), np.zeros(5, np.int64),
+                            np.zeros(3, np.int64), 1, NO_BOUND, NO_BOUND, 0, NO_BOUND, *t.args(), *scratch,
+                            states[r].copy(), actions, np.zeros((1, L), np.int64))
+        if got != kernel.GOAL:
+            raise RuntimeError("joint search: a stored state is no successor of its parent")
+        joint = actions[0, :m].copy()
+        nxt = apply(instance.world, state, joint)
+        if not isinstance(nxt, State):
+            raise RuntimeError(f"joint search: the rebuilt step breaks a rule: {nxt}")
+        steps.append(joint)
+        state = nxt
+    return np.array(steps, dtype=np.int64).T.reshape(m, len(steps))

@@ -1,0 +1,187 @@
+"""The flat tables the compiled search reads (:mod:`.kernel`): the pose graphs stacked by
+moveset, the cells allowed to change as bits, the packing of a joint state into words, each
+robot's distance bound, and the groups of interchangeable robots."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from bille.instances import Instance
+from bille.instances.rules import State
+
+from . import kernel
+from .cells import Cells
+
+FAR = 1 << 20  # the distance bound of a pose from which no goal pose can be reached
+
+
+@dataclass(frozen=True, eq=False)
+class Tables:
+    """An instance compiled for the joint search within one class of schedules (module docstring).
+
+    ``rbits`` bits per robot value (``pose * 2 + carrying``), ``rpw`` robots per word, ``nR``
+    words of robots and ``nT`` of tiles (63 bits each) per state."""
+
+    m: int
+    rbits: int
+    rpw: int
+    nR: int
+    nT: int
+    width: int
+    height: int
+    classic: bool
+    gid: np.ndarray
+    succ: np.ndarray
+    coll: np.ndarray
+    carry: np.ndarray
+    carry_ok: np.ndarray
+    need: np.ndarray
+    target: np.ndarray
+    kind: np.ndarray
+    bit_of: np.ndarray
+    cell_of: np.ndarray
+    fixed: np.ndarray
+    fixed_count: int
+    anchor: int
+    goal_words: np.ndarray
+    dist: np.ndarray
+    sym_start: np.ndarray
+    sym_idx: np.ndarray
+
+    @property
+    def L(self) -> int:
+        return self.nR + self.nT
+
+    def args(self) -> tuple:
+        """The tables in the order :func:`.kernel.expand` takes them."""
+        return (self.m, self.rbits, self.rpw, self.nR, self.nT, self.width, self.height, self.classic, self.gid,
+                self.succ, self.coll, self.carry, self.carry_ok, self.need, self.target, self.kind, self.bit_of,
+                self.cell_of, self.fixed, self.fixed_count, self.anchor, self.goal_words, self.dist,
+                self.sym_start, self.sym_idx)
+
+    def pack(self, state: State, canonical: bool = True) -> np.ndarray:
+        """A state as a row of words; ``canonical``: the robots of each symmetry group sorted."""
+        vals = [2 * int(p) + int(c) for p, c in zip(state.poses, state.carrying)]
+        if canonical:
+            for s in range(len(self.sym_start) - 1):
+                idx = self.sym_idx[self.sym_start[s]:self.sym_start[s + 1]]
+                for i, v in zip(idx, sorted(vals[i] for i in idx)):
+                    vals[i] = v
+        row = np.zeros(self.L, dtype=np.int64)
+        for i, v in enumerate(vals):
+            row[i // self.rpw] |= np.int64(v) << np.int64((i % self.rpw) * self.rbits)
+        for b, cell in enumerate(self.cell_of):
+            if state.tiles[cell]:
+                row[self.nR + b // kernel.TILE_BITS] |= np.int64(1) << np.int64(b % kernel.TILE_BITS)
+        return row
+
+    def is_goal(self, row: np.ndarray) -> bool:
+        if not np.array_equal(row[self.nR:], self.goal_words):
+            return False
+        mask = (1 << self.rbits) - 1
+        for i in range(self.m):
+            v = (int(row[i // self.rpw]) >> ((i % self.rpw) * self.rbits)) & mask
+            if v & 1 or self.dist[i, v >> 1] != 0:
+                return False
+        return True
+
+
+def compile_tables(instance: Instance, cells: Cells) -> Tables:
+    """The tables of ``instance`` within the class ``cells``."""
+    world = instance.world
+    m, n = instance.num_robots, instance.width * instance.height
+    graphs: list = []
+    gid = np.zeros(m, dtype=np.int64)
+    for i, g in enumerate(world.graphs):
+        for k, h in enumerate(graphs):
+            if h is g:
+                gid[i] = k
+                break
+        else:
+            gid[i] = len(graphs)
+            graphs.append(g)
+    P = max([g.num_poses for g in graphs] + [1])
+    A = max([g.num_actions for g in graphs] + [1])
+    K = max([g.coll.shape[2] for g in graphs] + [1])
+    Kc = max([g.carry.shape[2] for g in graphs] + [1])
+    G = max(len(graphs), 1)
+    succ = np.full((G, P, A), -1, np.int32)
+    coll = np.full((G, P, A, K), -1, np.int32)
+    carry = np.full((G, P, A, Kc), -1, np.int32)
+    carry_ok = np.zeros((G, P, A), np.bool_)
+    need = np.zeros((G, P, A, 2), np.int32)
+    target = np.full((G, P, A), -1, np.int32)
+    kind = np.zeros((G, A), np.int8)
+    for k, g in enumerate(graphs):
+        p, a = g.num_poses, g.num_actions
+        succ[k, :p, :a] = g.succ
+        coll[k, :p, :a, :g.coll.shape[2]] = g.coll
+        carry[k, :p, :a, :g.carry.shape[2]] = g.carry
+        carry_ok[k, :p, :a] = g.carry_ok
+        need[k, :p, :a] = np.maximum(g.need, 0)  # read only where succ >= 0, where need is a cell
+        target[k, :p, :a] = g.target
+        kind[k, :a] = g.kind
+
+    mask = cells.mask
+    cell_of = np.flatnonzero(mask).astype(np.int64)
+    bit_of = np.full(n, -1, np.int64)
+    bit_of[cell_of] = np.arange(len(cell_of))
+    fixed = (instance.start.tiles & ~mask).astype(np.uint8)
+    fixed_count = int(fixed.sum())
+    anchor = int(np.flatnonzero(fixed)[0]) if fixed_count else 0
+    nT = -(-len(cell_of) // kernel.TILE_BITS)
+    goal_words = np.zeros(nT, np.int64)
+    for b, cell in enumerate(cell_of):
+        if instance.goal_tiles[cell]:
+            goal_words[b // kernel.TILE_BITS] |= np.int64(1) << np.int64(b % kernel.TILE_BITS)
+
+    rbits = max(1, (2 * P - 1).bit_length())
+    rpw = max(1, 62 // rbits)
+    nR = max(1, -(-m // rpw))
+    possible = instance.start.tiles | mask  # the cells that may hold a tile at some step
+    dist = np.zeros((m, P), np.int32)
+    cache: dict = {}
+    for i, goal in enumerate(instance.goal_cells):
+        if goal >= 0:
+            key = (int(gid[i]), goal)
+            if key not in cache:
+                cache[key] = _distances(graphs[gid[i]], goal, possible, P)
+            dist[i] = cache[key]
+    groups: dict = {}
+    for i, goal in enumerate(instance.goal_cells):
+        if goal < 0:
+            groups.setdefault(int(gid[i]), []).append(i)
+    sym = [idx for idx in groups.values() if len(idx) > 1]
+    sym_start = np.cumsum([0] + [len(idx) for idx in sym]).astype(np.int64)
+    sym_idx = np.array([i for idx in sym for i in idx], dtype=np.int64)
+    return Tables(m, rbits, rpw, nR, nT, instance.width, instance.height, instance.collisions == "classic", gid, succ,
+                  coll, carry, carry_ok, need, target, kind, bit_of, cell_of, fixed, fixed_count, anchor, goal_words,
+                  dist, sym_start, sym_idx)
+
+
+def _distances(graph, goal: int, possible: np.ndarray, P: int) -> np.ndarray:
+    """Each pose's least number of motions to a pose with its front foot on ``goal``, over the
+    moves whose new feet are on ``possible`` cells (:data:`FAR` where there is none). A lower
+    bound on the steps a robot needs: every pose a schedule of the class takes has its feet on
+    tiles (rule 4), so on cells of ``possible``."""
+    from scipy.sparse import csr_matrix
+    from scipy.sparse.csgraph import shortest_path
+
+    walks = (graph.kind == kernel.WAIT) | (graph.kind == kernel.MOTION)
+    ok = (graph.succ >= 0) & walks[None, :]
+    ok &= possible[np.maximum(graph.need[..., 0], 0)] & possible[np.maximum(graph.need[..., 1], 0)]
+    p, a = np.nonzero(ok)
+    s = graph.succ[p, a]
+    keep = s != p
+    q = graph.num_poses
+    # reversed edges (successor -> pose) plus a source q joined to every goal pose
+    goals = np.flatnonzero(graph.valid & (graph.feet[:, 0] == goal))
+    rows = np.concatenate([s[keep], np.full(len(goals), q)])
+    cols = np.concatenate([p[keep], goals])
+    matrix = csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(q + 1, q + 1))
+    d = shortest_path(matrix, unweighted=True, indices=q, directed=True)[:q] - 1
+    out = np.full(P, FAR, np.int32)
+    finite = np.isfinite(d)
+    out[:q][finite] = d[finite].astype(np.int32)
+    return out
