@@ -12,7 +12,7 @@ the same tables :func:`bille.instances.rules.apply` reads:
    so the tiles before the step decide rule 4, as in :func:`bille.instances.successors.candidate_actions`);
 3. collision while choosing each robot's action (:func:`_fits`): disjoint collision sets, or the
    classic convention (vertex, swap, exclusive pick/place targets);
-5. connectivity of the new tiles at the leaf (:func:`_connected`).
+5. connectivity of the new tiles at the leaf (:func:`connected`).
 
 The search keeps every state found in ``states`` (a layer is a range of rows), a parent index per
 state, and an open-addressing hash table of row numbers + 1. :func:`expand` works through a range
@@ -33,7 +33,8 @@ not stored (:mod:`.search` proves ``h`` admissible).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from .compiled import jit, connected, popcount, lookup
 
 WAIT, MOTION, PICK, PLACE = 0, 1, 2, 3  # bille.instances.moveset.Kind
 SEARCH, FIND, COLLECT = 0, 1, 2  # modes of expand
@@ -43,108 +44,7 @@ N_STATES, N_TABLE, GOAL_ROW, LEAVES, PRUNED = 0, 1, 2, 3, 4
 TILE_BITS = 63
 
 
-def _compiled(function):
-    """``function`` compiled, its machine code cached on disk where Numba finds a writable place."""
-    try:
-        return njit(cache=True)(function)
-    except RuntimeError:  # Numba: "cannot cache function ...: no locator available"
-        return njit(function)
-
-
-@_compiled
-def hash_row(row):  # pragma: no cover - compiled
-    h = np.int64(-7046029254386353131)
-    for w in row:
-        h ^= w
-        h *= np.int64(-7046029254386353131)
-        h ^= (h >> np.int64(31)) & np.int64(0x1FFFFFFFF)
-    return h
-
-
-@_compiled
-def _same(states, r, row):  # pragma: no cover - compiled
-    for k in range(row.shape[0]):
-        if states[r, k] != row[k]:
-            return False
-    return True
-
-
-@_compiled
-def lookup(states, table, row):  # pragma: no cover - compiled
-    """The slot of ``row`` in ``table``: its entry if stored, else the empty slot where it goes."""
-    mask = table.shape[0] - 1
-    slot = hash_row(row) & mask
-    while True:
-        e = table[slot]
-        if e == 0 or _same(states, e - 1, row):
-            return slot
-        slot = (slot + 1) & mask
-
-
-@_compiled
-def rehash(states, n, size):  # pragma: no cover - compiled
-    """A table of ``size`` slots (a power of two) holding rows ``0..n-1``."""
-    table = np.zeros(size, dtype=np.int64)
-    mask = size - 1
-    for r in range(n):
-        slot = hash_row(states[r]) & mask
-        while table[slot] != 0:
-            slot = (slot + 1) & mask
-        table[slot] = r + 1
-    return table
-
-
-@_compiled
-def _popcount(w):  # pragma: no cover - compiled
-    c = 0
-    while w != 0:
-        w &= w - 1
-        c += 1
-    return c
-
-
-@_compiled
-def _connected(tiles, width, height, total, anchor, stack, seen, stamp):  # pragma: no cover - compiled
-    """Whether the ``total`` tiles of ``tiles`` form one 4-connected piece (flood from ``anchor``)."""
-    if total == 0:
-        return False
-    if tiles[anchor] == 0:
-        anchor = -1
-        for c in range(tiles.shape[0]):
-            if tiles[c] != 0:
-                anchor = c
-                break
-    top = 0
-    stack[0] = anchor
-    seen[anchor] = stamp
-    count = 1
-    while top >= 0:
-        c = stack[top]
-        top -= 1
-        x = c % width
-        y = c // width
-        for d in range(4):
-            nx, ny = x, y
-            if d == 0:
-                ny = y - 1
-            elif d == 1:
-                nx = x + 1
-            elif d == 2:
-                ny = y + 1
-            else:
-                nx = x - 1
-            if nx < 0 or ny < 0 or nx >= width or ny >= height:
-                continue
-            nc = ny * width + nx
-            if tiles[nc] != 0 and seen[nc] != stamp:
-                seen[nc] = stamp
-                count += 1
-                top += 1
-                stack[top] = nc
-    return count == total
-
-
-@_compiled
+@jit
 def _fits(i, a, g, p, c, classic, coll, carry, succ, target, occ, endocc, startocc, tgt, after):  # pragma: no cover
     """Whether robot ``i``'s action ``a`` is free of collisions with the robots chosen before it
     (rule 3, or the classic convention); marks its cells if so."""
@@ -187,7 +87,7 @@ def _fits(i, a, g, p, c, classic, coll, carry, succ, target, occ, endocc, starto
     return True
 
 
-@_compiled
+@jit
 def _unmark(i, a, g, p, c, classic, coll, carry, succ, target, occ, endocc, tgt):  # pragma: no cover
     if classic:
         endocc[succ[g, p, a]] = 0
@@ -206,18 +106,19 @@ def _unmark(i, a, g, p, c, classic, coll, carry, succ, target, occ, endocc, tgt)
                 occ[cell] = 0
 
 
-@_compiled
+@jit
 def expand(mode, states, parent, table, counters, cursor, hi, work, max_rows, depth, U,
            # the instance's tables (.tables.Tables)
            m, rbits, rpw, nR, nT, width, height, classic, gid, succ, coll, carry, carry_ok, need, target, kind,
-           bit_of, cell_of, fixed, fixed_count, anchor, goal_words, dist, sym_start, sym_idx,
+           bit_of, cell_of, fixed, fixed_count, anchor, goal_words, dist, sym_start, sym_idx, masks, W,
            # scratch, allocated once by the caller
            tiles, occ, endocc, startocc, tgt, cand, ncand, choice, pose, carrying, after, vals, row, seen, stack,
-           stamp,
+           stamp, usedw,
            # FIND: the successor to match (its canonical row) and where its joint action goes;
            # COLLECT: rows and joint actions of every successor (raw, not canonical)
            match, out_actions, out_rows):  # pragma: no cover - compiled
     L = nR + nT
+    bits = W > 0 and not classic  # rule 3 by the collision sets' bit masks (.tables)
     rmask = (np.int64(1) << np.int64(rbits)) - 1
     big = U < (1 << 40)
     pos = cursor[0]
@@ -272,17 +173,23 @@ def expand(mode, states, parent, table, counters, cursor, hi, work, max_rows, de
         if cursor[2] == 1:  # resuming inside this state: mark the robots chosen so far again
             level = cursor[1]
             for i in range(level + 1):
-                if choice[i] >= 0:
+                if bits:
+                    if choice[i] >= 0:
+                        for w in range(W):
+                            usedw[i + 1, w] = usedw[i, w] | masks[gid[i], pose[i], cand[i, choice[i]], carrying[i], w]
+                elif choice[i] >= 0:
                     _fits(i, cand[i, choice[i]], gid[i], pose[i], carrying[i], classic, coll, carry, succ, target,
                           occ, endocc, startocc, tgt, after)
         else:
             level = 0
             choice[0] = -1
+        for w in range(W):
+            usedw[0, w] = 0
         # ---- backtracking over the robots' candidates (rule 3 as they are chosen) ---------------
         while level >= 0:
             if steps >= work or counters[N_STATES] >= max_rows or 2 * counters[N_TABLE] >= table.shape[0]:
                 for i in range(level + 1):  # unmark: the caller may grow the table, then resume here
-                    if choice[i] >= 0:
+                    if choice[i] >= 0 and not bits:
                         _unmark(i, cand[i, choice[i]], gid[i], pose[i], carrying[i], classic, coll, carry, succ,
                                 target, occ, endocc, tgt)
                 if classic:
@@ -298,14 +205,27 @@ def expand(mode, states, parent, table, counters, cursor, hi, work, max_rows, de
                 return PAUSED
             steps += 1
             g = gid[level]
-            if choice[level] >= 0:
-                _unmark(level, cand[level, choice[level]], g, pose[level], carrying[level], classic, coll, carry,
-                        succ, target, occ, endocc, tgt)
+            p = pose[level]
+            c = carrying[level]
+            if choice[level] >= 0 and not bits:
+                _unmark(level, cand[level, choice[level]], g, p, c, classic, coll, carry, succ, target, occ, endocc,
+                        tgt)
             choice[level] += 1
             ok = False
             while choice[level] < ncand[level]:
-                if _fits(level, cand[level, choice[level]], g, pose[level], carrying[level], classic, coll, carry,
-                         succ, target, occ, endocc, startocc, tgt, after):
+                a = cand[level, choice[level]]
+                if bits:
+                    ok = True
+                    for w in range(W):
+                        if usedw[level, w] & masks[g, p, a, c, w] != 0:
+                            ok = False
+                            break
+                    if ok:
+                        for w in range(W):
+                            usedw[level + 1, w] = usedw[level, w] | masks[g, p, a, c, w]
+                        break
+                elif _fits(level, a, g, p, c, classic, coll, carry, succ, target, occ, endocc, startocc, tgt,
+                           after):
                     ok = True
                     break
                 choice[level] += 1
@@ -342,14 +262,14 @@ def expand(mode, states, parent, table, counters, cursor, hi, work, max_rows, de
             if changed:
                 total = fixed_count
                 for k in range(nT):
-                    total += _popcount(row[nR + k])
+                    total += popcount(row[nR + k])
                 for b in range(cell_of.shape[0]):
                     tiles[cell_of[b]] = (row[nR + b // TILE_BITS] >> np.int64(b % TILE_BITS)) & 1
                 stamp[0] += 1
-                connected = _connected(tiles, width, height, total, anchor, stack, seen, stamp[0])
+                joined = connected(tiles, width, height, total, anchor, stack, seen, stamp[0])
                 for b in range(cell_of.shape[0]):
                     tiles[cell_of[b]] = (src[nR + b // TILE_BITS] >> np.int64(b % TILE_BITS)) & 1
-                if not connected:
+                if not joined:
                     continue
             counters[LEAVES] += 1
             if mode == COLLECT:
@@ -373,7 +293,7 @@ def expand(mode, states, parent, table, counters, cursor, hi, work, max_rows, de
                         h = e
                 mis = 0
                 for k in range(nT):
-                    mis += _popcount(row[nR + k] ^ goal_words[k])
+                    mis += popcount(row[nR + k] ^ goal_words[k])
                 e = (mis + m - 1) // m if m > 0 else 0
                 if e > h:
                     h = e
@@ -404,7 +324,7 @@ def expand(mode, states, parent, table, counters, cursor, hi, work, max_rows, de
                     for i in range(m):
                         out_actions[0, i] = cand[i, choice[i]]
                     for i in range(level + 1):
-                        if choice[i] >= 0:
+                        if choice[i] >= 0 and not bits:
                             _unmark(i, cand[i, choice[i]], gid[i], pose[i], carrying[i], classic, coll, carry, succ,
                                     target, occ, endocc, tgt)
                     if classic:
@@ -434,7 +354,7 @@ def expand(mode, states, parent, table, counters, cursor, hi, work, max_rows, de
             if goal:
                 counters[GOAL_ROW] = r
                 for i in range(level + 1):
-                    if choice[i] >= 0:
+                    if choice[i] >= 0 and not bits:
                         _unmark(i, cand[i, choice[i]], gid[i], pose[i], carrying[i], classic, coll, carry, succ,
                                 target, occ, endocc, tgt)
                 if classic:

@@ -50,6 +50,7 @@ from bille.instances.rules import State, apply
 from bille.instances.run import Budget, Events
 
 from . import kernel
+from .compiled import rehash
 from .cells import Cells
 from .tables import Tables, compile_tables
 
@@ -103,7 +104,7 @@ def search(instance: Instance, cells: Cells, budget: Budget, *, U: int | None = 
     states = np.zeros((rows, L), dtype=np.int64)  # pages are touched only as states are stored
     parent = np.zeros(rows, dtype=np.int64)
     states[0] = row
-    table = kernel.rehash(states, 1, TABLE_START)
+    table = rehash(states, 1, TABLE_START)
     counters = np.zeros(5, dtype=np.int64)
     counters[kernel.N_STATES] = counters[kernel.N_TABLE] = 1
     scratch = _scratch(t, n, A, m, L)
@@ -124,7 +125,7 @@ def search(instance: Instance, cells: Cells, budget: Budget, *, U: int | None = 
                 out.ids = _unwind(instance, t, states, parent, int(counters[kernel.GOAL_ROW]), scratch)
                 return out
             if got == kernel.GROW:
-                table = kernel.rehash(states, int(counters[kernel.N_STATES]), 2 * table.shape[0])
+                table = rehash(states, int(counters[kernel.N_STATES]), 2 * table.shape[0])
                 continue
             if got == kernel.FULL:
                 return _ended(out, "states", proved, depth, counters)
@@ -159,7 +160,7 @@ def _scratch(t: Tables, n: int, A: int, m: int, L: int) -> tuple:
     return (tiles, np.zeros(n, np.int64), np.zeros(n, np.int64), np.zeros(n, np.int64), np.zeros(n, np.int64),
             np.zeros((mm, A), np.int64), np.zeros(mm, np.int64), np.full(mm, -1, np.int64), np.zeros(mm, np.int64),
             np.zeros(mm, np.int64), np.zeros(mm, np.int64), np.zeros(mm, np.int64), np.zeros(L, np.int64),
-            np.zeros(n, np.int64), np.zeros(n, np.int64), np.zeros(1, np.int64))
+            np.zeros(n, np.int64), np.zeros(n, np.int64), np.zeros(1, np.int64), np.zeros((mm + 1, max(t.W, 1)), np.int64))
 
 
 def successors(t: Tables, n: int, row: np.ndarray, cap: int = 1 << 16) -> tuple[np.ndarray, np.ndarray]:
@@ -167,7 +168,6 @@ def successors(t: Tables, n: int, row: np.ndarray, cap: int = 1 << 16) -> tuple[
     as ``(actions[k, m], rows[k, L])`` (the parity test's view of the kernel)."""
     m, L, A = t.m, t.L, t.kind.shape[1]
     scratch = _scratch(t, n, A, m, L)
-    scratch[-1][0] = 0
     actions = np.zeros((cap, max(m, 1)), np.int64)
     rows = np.zeros((cap, L), np.int64)
     counters = np.zeros(5, np.int64)

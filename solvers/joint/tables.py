@@ -13,7 +13,8 @@ from bille.instances.rules import State
 from . import kernel
 from .cells import Cells
 
-FAR = 1 << 20  # the distance bound of a pose from which no goal pose can be reached
+FAR = 1 << 20
+MASK_CELLS = 512  # grids up to this many cells test rule 3 by bit masks (at most 8 words an action)  # the distance bound of a pose from which no goal pose can be reached
 
 
 @dataclass(frozen=True, eq=False)
@@ -48,6 +49,8 @@ class Tables:
     dist: np.ndarray
     sym_start: np.ndarray
     sym_idx: np.ndarray
+    masks: np.ndarray
+    W: int
 
     @property
     def L(self) -> int:
@@ -58,7 +61,7 @@ class Tables:
         return (self.m, self.rbits, self.rpw, self.nR, self.nT, self.width, self.height, self.classic, self.gid,
                 self.succ, self.coll, self.carry, self.carry_ok, self.need, self.target, self.kind, self.bit_of,
                 self.cell_of, self.fixed, self.fixed_count, self.anchor, self.goal_words, self.dist,
-                self.sym_start, self.sym_idx)
+                self.sym_start, self.sym_idx, self.masks, self.W)
 
     def pack(self, state: State, canonical: bool = True) -> np.ndarray:
         """A state as a row of words; ``canonical``: the robots of each symmetry group sorted."""
@@ -155,9 +158,34 @@ def compile_tables(instance: Instance, cells: Cells) -> Tables:
     sym = [idx for idx in groups.values() if len(idx) > 1]
     sym_start = np.cumsum([0] + [len(idx) for idx in sym]).astype(np.int64)
     sym_idx = np.array([i for idx in sym for i in idx], dtype=np.int64)
-    return Tables(m, rbits, rpw, nR, nT, instance.width, instance.height, instance.collisions == "classic", gid, succ,
-                  coll, carry, carry_ok, need, target, kind, bit_of, cell_of, fixed, fixed_count, anchor, goal_words,
-                  dist, sym_start, sym_idx)
+    classic = instance.collisions == "classic"
+    W = -(-n // 64) if not classic and n <= MASK_CELLS else 0
+    masks = _masks(coll, carry, W) if W else np.zeros((1, 1, 1, 2, 1), np.int64)
+    return Tables(m, rbits, rpw, nR, nT, instance.width, instance.height, classic, gid, succ, coll, carry, carry_ok,
+                  need, target, kind, bit_of, cell_of, fixed, fixed_count, anchor, goal_words, dist, sym_start,
+                  sym_idx, masks, W)
+
+
+def _masks(coll: np.ndarray, carry: np.ndarray, W: int) -> np.ndarray:
+    """Each action's collision set as bits of ``W`` words, ``[g, p, a, carrying, w]``: rule 3 is
+    then that the masks of the robots' actions share no bit (their sets, with the carried tile's
+    cells when carrying, are pairwise disjoint)."""
+    G, P, A, _ = coll.shape
+    masks = np.zeros((G, P, A, 2, W), np.uint64)
+
+    def add(cells, which):
+        for k in range(cells.shape[3]):
+            cell = cells[..., k].astype(np.int64)
+            has = cell >= 0
+            word = np.where(has, cell // 64, 0)
+            bit = np.where(has, np.left_shift(np.uint64(1), (np.maximum(cell, 0) % 64).astype(np.uint64)), np.uint64(0))
+            for w in range(W):
+                for c in which:
+                    masks[:, :, :, c, w] |= np.where(word == w, bit, np.uint64(0))
+
+    add(coll, (0, 1))
+    add(carry, (1,))
+    return masks.view(np.int64)
 
 
 def _distances(graph, goal: int, possible: np.ndarray, P: int) -> np.ndarray:
