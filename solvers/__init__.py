@@ -178,6 +178,9 @@ def _raised(classes: dict | None, result: Result) -> dict | None:
     if classes is None or result.status == "infeasible":
         return None
     out = {key: c if c.empty else ClassBound(key, max(c.lower, result.lower_bound or 0)) for key, c in classes.items()}
+    for key, value in {**result.stats.get("class_lower_bounds", {}), **result.stats.get("class_optima", {})}.items():
+        if key in out and not out[key].empty:  # proved by an exact search of the class (anytime's)
+            out[key] = ClassBound(key, max(out[key].lower, value))
     restricted = result.stats.get("restricted_lower_bound")
     for flag, key in RESTRICTIONS.items():
         if result.stats.get(flag) and restricted is not None and not out[key].empty:
