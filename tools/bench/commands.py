@@ -180,6 +180,29 @@ def bench_exact(time_limit: float, threads: int, only) -> int:
     return EXIT_OK
 
 
+@bench.command("joint")
+@click.option("--maps", default="lt-1,lt-2,lt-3,lt-4,lt-5,lt-7,lt-8,bridge-2", show_default=True,
+              help="Comma-separated bundled maps.")
+@click.option("--cells", type=click.Choice(["keep", "no-scaffold", "all"]), default="keep", show_default=True,
+              help="The class of schedules searched.")
+@click.option("--add-cells", metavar="JSON", help="Cells added to the class, e.g. [[8,2],[8,5]].")
+@click.option("--time-limit", type=click.FloatRange(min=0.1), default=60.0, show_default=True, help="Seconds per map.")
+def bench_joint(maps: str, cells: str, add_cells: str | None, time_limit: float) -> int:
+    """The compiled joint search on the paper's maps within a class of schedules: each class's
+    optimum, states and seconds, and the speed-up over the Python search in the same run."""
+    from .joint import report
+
+    add = None
+    if add_cells:
+        try:
+            add = json.loads(add_cells)
+        except json.JSONDecodeError:
+            raise click.BadParameter(f"expected a JSON list of [x, y] pairs, got {add_cells!r}",
+                                     param_hint="--add-cells") from None
+    report(_names(maps), cells, add, time_limit, echo=click.echo)
+    return EXIT_OK
+
+
 @bench.command("hampath")
 @click.option("--size", type=click.IntRange(2, 40), default=10, show_default=True, help="Largest grid graph side.")
 @click.option("--scale", "-s", type=click.IntRange(min=1), default=1, show_default=True)
