@@ -18,8 +18,9 @@ reference the compiled search is tested against.
 
 >>> from bille.instances import instance_from_text
 >>> inst = instance_from_text("grid: |\\n  TTT\\nmoveset: point\\nrobots: [{at: [0, 0]}]\\nrobot_goals: [[2, 0]]")
->>> plan(inst).metrics.makespan
-2
+>>> found = plan(inst)
+>>> found.status, found.lower_bound, found.schedule.actions
+('optimal', 2, (('east', 'east'),))
 """
 from __future__ import annotations
 

@@ -13,6 +13,7 @@ from bille.instances.bundled import bundled_path
 from ..common import EXIT_NO, EXIT_OK, instance_arg, output_folder
 from .args import counts as _counts, names as _names
 from .proof_commands import bench_cbs, bench_interrupt
+from .joint import bench_joint
 from .loop_schedules import bench_loop_schedules
 from .solving import bench_anytime, bench_gaps
 
@@ -25,6 +26,7 @@ def bench() -> None:
 bench.add_command(bench_anytime)
 bench.add_command(bench_gaps)
 bench.add_command(bench_loop_schedules)
+bench.add_command(bench_joint)
 
 
 @bench.command("core")
@@ -177,29 +179,6 @@ def bench_exact(time_limit: float, threads: int, only) -> int:
     from .exact import report
 
     report(time_limit, threads, only or ("optimum", "connectivity", "pruning", "presolve"), echo=click.echo)
-    return EXIT_OK
-
-
-@bench.command("joint")
-@click.option("--maps", default="lt-1,lt-2,lt-3,lt-4,lt-5,lt-7,lt-8,bridge-2", show_default=True,
-              help="Comma-separated bundled maps.")
-@click.option("--cells", type=click.Choice(["keep", "no-scaffold", "all"]), default="keep", show_default=True,
-              help="The class of schedules searched.")
-@click.option("--add-cells", metavar="JSON", help="Cells added to the class, e.g. [[8,2],[8,5]].")
-@click.option("--time-limit", type=click.FloatRange(min=0.1), default=60.0, show_default=True, help="Seconds per map.")
-def bench_joint(maps: str, cells: str, add_cells: str | None, time_limit: float) -> int:
-    """The compiled joint search on the paper's maps within a class of schedules: each class's
-    optimum, states and seconds, and the speed-up over the Python search in the same run."""
-    from .joint import report
-
-    add = None
-    if add_cells:
-        try:
-            add = json.loads(add_cells)
-        except json.JSONDecodeError:
-            raise click.BadParameter(f"expected a JSON list of [x, y] pairs, got {add_cells!r}",
-                                     param_hint="--add-cells") from None
-    report(_names(maps), cells, add, time_limit, echo=click.echo)
     return EXIT_OK
 
 
