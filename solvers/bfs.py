@@ -53,6 +53,7 @@ class Options(MethodOptions):
     max_steps: int | None = option(None, at_least=0)
     max_states: int | None = option(None, at_least=1)
     engine: str = option("compiled", choices=("compiled", "python"))
+    direction: str = option("forward", choices=("forward", "both"))
 
     def check(self) -> None:
         if self.engine == "python" and (self.cells != "all" or self.add_cells or self.incumbent is not None):
@@ -100,7 +101,7 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
         raise OptionError(f"bfs: max_states {max_states:,} needs about {human(max_states * per)}, more than the "
                           f"{human(room)} this machine allows (BILLE_MEMORY_GIB sets it)")
     out = search(instance, cells, budget, U=upper, max_states=max_states, max_steps=options.max_steps,
-                 events=run.events, tables=tables)
+                 events=run.events, tables=tables, direction=options.direction)
     return _result(instance, cells, out, upper, incumbent, options, budget)
 
 

@@ -86,9 +86,12 @@ def bytes_per_state(tables: Tables) -> int:
 
 
 def search(instance: Instance, cells: Cells, budget: Budget, *, U: int | None = None, max_states: int,
-           max_steps: int | None = None, events: Events | None = None, tables: Tables | None = None) -> Outcome:
+           max_steps: int | None = None, events: Events | None = None, tables: Tables | None = None,
+           direction: str = "forward") -> Outcome:
     """Breadth-first search within ``cells`` below ``U`` (module docstring); ``budget`` polled
-    within layers, ``max_states`` stored states at most, ``max_steps`` layers at most."""
+    within layers, ``max_states`` stored states at most, ``max_steps`` layers at most.
+    ``direction``: ``forward``, or ``both`` for the search from both ends
+    (:mod:`.bidirectional`) where the goal states can be listed."""
     t = tables or compile_tables(instance, cells)
     bound = NO_BOUND if U is None else int(U)
     root = instance.start_state
@@ -97,6 +100,13 @@ def search(instance: Instance, cells: Cells, budget: Budget, *, U: int | None = 
         return Outcome("goal", 0, ids=np.zeros((instance.num_robots, 0), dtype=np.int64), states=1)
     if bound <= 0:
         return Outcome("exhausted", bound, states=1)
+    if direction == "both":
+        from .bidirectional import goal_rows, search_both
+
+        goals = goal_rows(instance, t)
+        if goals is not None:
+            return search_both(instance, cells, t, goals, budget, U=U, max_states=max_states, max_steps=max_steps,
+                               events=events)
     L, m = t.L, t.m
     n = instance.width * instance.height
     A = t.kind.shape[1]
@@ -181,23 +191,28 @@ def successors(t: Tables, n: int, row: np.ndarray, cap: int = 1 << 16) -> tuple[
 
 
 def _unwind(instance: Instance, t: Tables, states, parent, goal_row: int, scratch) -> np.ndarray:
-    """The schedule to the state at ``goal_row``: the path of stored (sorted) states, replayed
-    forward from the start with each robot's own identity (module docstring)."""
+    """The schedule to the state at ``goal_row`` (module docstring)."""
     path = [goal_row]
     while path[-1] != 0:
         path.append(int(parent[path[-1]]))
-    path.reverse()
+    return replay(instance, t, [states[r] for r in path[-2::-1]], scratch)
+
+
+def replay(instance: Instance, t: Tables, rows: list, scratch) -> np.ndarray:
+    """Action ids ``[m, len(rows)]`` of the steps from the start through the (sorted) states
+    ``rows`` in turn, with each robot's own identity: each step is one of the successors of the
+    actual state whose sorted form is the next row, checked by the Python rules."""
     state = instance.start_state
     m, L = t.m, t.L
     steps = []
-    for r in path[1:]:
+    for target in rows:
         raw = t.pack(state, canonical=False)[None, :]
         actions = np.zeros((1, max(m, 1)), np.int64)
         got = kernel.expand(kernel.FIND, raw, np.zeros(1, np.int64), np.zeros(2, np.int64), np.zeros(5, np.int64),
                             np.zeros(3, np.int64), 1, NO_BOUND, NO_BOUND, 0, NO_BOUND, *t.args(), *scratch,
-                            states[r].copy(), actions, np.zeros((1, L), np.int64))
+                            np.asarray(target).copy(), actions, np.zeros((1, L), np.int64))
         if got != kernel.GOAL:
-            raise RuntimeError("joint search: a stored state is no successor of its parent")
+            raise RuntimeError("joint search: a stored state is no successor of the one before it")
         joint = actions[0, :m].copy()
         nxt = apply(instance.world, state, joint)
         if not isinstance(nxt, State):

@@ -3,6 +3,7 @@ moveset, the cells allowed to change as bits, the packing of a joint state into 
 robot's distance bound, and the groups of interchangeable robots."""
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -164,6 +165,47 @@ def compile_tables(instance: Instance, cells: Cells) -> Tables:
     return Tables(m, rbits, rpw, nR, nT, instance.width, instance.height, classic, gid, succ, coll, carry, carry_ok,
                   need, target, kind, bit_of, cell_of, fixed, fixed_count, anchor, goal_words, dist, sym_start,
                   sym_idx, masks, W)
+
+
+def reverse_tables(instance: Instance, forward: Tables) -> Tables:
+    """The tables of the steps taken backwards, for the search from the goal (:mod:`.bidirectional`).
+
+    A step back over action ``a`` from pose ``q`` comes from the pose ``p`` with ``succ[p, a] = q``
+    (each action's successor is one-to-one: a translation and a turn). It is valid exactly when the
+    step forward from ``p`` is, from a valid state: so its collision set, carried cells and target
+    are ``p``'s, the feet it needs on tiles are ``p``'s (the state before a step is valid), and
+    undoing a pick puts the tile back (the kernel's place: the robot carries, the target is
+    empty), undoing a place takes it (the kernel's pick). Connectivity is then checked on the
+    tiles before the step, which a valid state has too; the tiles after the step were checked
+    when the state was stored. No state is a goal of this side (``dist`` is 1 everywhere): the
+    sides meet instead."""
+    world = instance.world
+    graphs = []
+    for g in world.graphs:
+        if all(h is not g for h in graphs):
+            graphs.append(g)
+    G, P, A = forward.succ.shape
+    rsucc = np.full((G, P, A), -1, np.int32)
+    rcoll = np.full_like(forward.coll, -1)
+    rcarry = np.full_like(forward.carry, -1)
+    rcarry_ok = np.zeros_like(forward.carry_ok)
+    rneed = np.zeros_like(forward.need)
+    rtarget = np.full_like(forward.target, -1)
+    kind = forward.kind.copy()
+    kind[forward.kind == kernel.PICK] = kernel.PLACE
+    kind[forward.kind == kernel.PLACE] = kernel.PICK
+    for k, g in enumerate(graphs):
+        p, a = np.nonzero(forward.succ[k] >= 0)
+        q = forward.succ[k, p, a]
+        rsucc[k, q, a] = p
+        rcoll[k, q, a] = forward.coll[k, p, a]
+        rcarry[k, q, a] = forward.carry[k, p, a]
+        rcarry_ok[k, q, a] = forward.carry_ok[k, p, a]
+        rneed[k, q, a] = np.maximum(g.feet[p], 0)
+        rtarget[k, q, a] = forward.target[k, p, a]
+    masks = _masks(rcoll, rcarry, forward.W) if forward.W else forward.masks
+    return dataclasses.replace(forward, succ=rsucc, coll=rcoll, carry=rcarry, carry_ok=rcarry_ok, need=rneed,
+                               target=rtarget, kind=kind, masks=masks, dist=np.ones_like(forward.dist))
 
 
 def _masks(coll: np.ndarray, carry: np.ndarray, W: int) -> np.ndarray:
