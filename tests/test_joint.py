@@ -77,10 +77,10 @@ def bfs(inst, **options):
     return solve(inst, "bfs", time_limit=None, **options)
 
 
-def compare_with_reference(instances) -> int:
+def compare_with_reference(instances, direction: str = "forward") -> int:
     decided = 0
     for inst in instances:
-        ref, got = reference(inst), bfs(inst)
+        ref, got = reference(inst), bfs(inst, direction=direction)
         if ref.status == "optimal":
             decided += 1
             assert got.status == "optimal", inst.name
@@ -94,13 +94,33 @@ def compare_with_reference(instances) -> int:
     return decided
 
 
-def test_optima_equal_the_python_search():
-    assert compare_with_reference(tiny_instances(40)) >= 30
+@pytest.mark.parametrize("direction", ["forward", "both"])
+def test_optima_equal_the_python_search(direction):
+    assert compare_with_reference(tiny_instances(40), direction) >= 30
 
 
 @pytest.mark.slow
-def test_optima_equal_the_python_search_on_many():
-    assert compare_with_reference(tiny_instances(240, first_seed=1000)) >= 150
+@pytest.mark.parametrize("direction", ["forward", "both"])
+def test_optima_equal_the_python_search_on_many(direction):
+    assert compare_with_reference(tiny_instances(240, first_seed=1000), direction) >= 150
+
+
+def test_both_ends_agree_on_classes_and_classic_instances():
+    for inst in tiny_instances(30, first_seed=500) + CLASSIC:
+        for cells in ("keep", "no-scaffold", "all"):
+            one, two = bfs(inst, cells=cells), bfs(inst, cells=cells, direction="both")
+            assert one.status == two.status, (inst.name, cells)
+            if one.status == "optimal":
+                assert one.metrics.makespan == two.metrics.makespan, (inst.name, cells)
+                assert validate(inst, two.schedule).valid
+
+
+def test_both_ends_stop_with_the_bound_of_the_layers_done():
+    inst = make("TTTTTTTT", [{"at": [0, 0]}], moveset="point", robot_goals=[[7, 0]])
+    got = bfs(inst, direction="both", max_steps=3)
+    assert got.status == "unsolved" and got.lower_bound == 4 and got.stats["failure"] == "step bound"
+    got = bfs(inst, direction="both")
+    assert got.status == "optimal" and got.metrics.makespan == 7
 
 
 def check_classes(instances) -> int:

@@ -82,8 +82,8 @@ class _Side:
     def __init__(self, t: Tables, rows: int, seeds: np.ndarray, scratch) -> None:
         self.t, self.scratch = t, scratch
         self.states = np.zeros((rows, t.L), dtype=np.int64)
-        self.parent = np.full(rows, -1, dtype=np.int64)
-        k = len(seeds)
+        self.parent = np.zeros(rows, dtype=np.int64)  # pages touched only as states are stored
+        k = self.seeds = len(seeds)
         self.states[:k] = seeds
         size = 1 << max(12, (2 * k).bit_length() + 1)
         self.table = rehash(self.states, k, size)
@@ -123,7 +123,7 @@ class _Side:
     def path(self, row: int) -> list[int]:
         """Rows from this side's seed to ``row``."""
         out = [row]
-        while self.parent[out[-1]] >= 0:
+        while out[-1] >= self.seeds:
             out.append(int(self.parent[out[-1]]))
         return out[::-1]
 
