@@ -44,7 +44,9 @@ class Options(MethodOptions):
     to search below. ``max_steps``: depth cap (none: until the goal, the time limit or the state
     cap). ``max_states``: states stored at most (none: as many as fit in the memory allowed,
     ``BILLE_MEMORY_GIB``). ``engine``: ``compiled``, or ``python`` for the reference twin
-    (every schedule only, no incumbent)."""
+    (every schedule only, no incumbent). ``direction``: ``forward`` from the start, ``both``
+    from the start and back from the goal states (:mod:`.joint.bidirectional`), ``auto`` both
+    where the goal states can be listed and no incumbent is given (its pruning works forward)."""
 
     METHOD = "bfs"
     cells: str = option("all", choices=KINDS)
@@ -53,7 +55,7 @@ class Options(MethodOptions):
     max_steps: int | None = option(None, at_least=0)
     max_states: int | None = option(None, at_least=1)
     engine: str = option("compiled", choices=("compiled", "python"))
-    direction: str = option("forward", choices=("forward", "both"))
+    direction: str = option("auto", choices=("auto", "forward", "both"))
 
     def check(self) -> None:
         if self.engine == "python" and (self.cells != "all" or self.add_cells or self.incumbent is not None):
@@ -101,8 +103,14 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
         raise OptionError(f"bfs: max_states {max_states:,} needs about {human(max_states * per)}, more than the "
                           f"{human(room)} this machine allows (BILLE_MEMORY_GIB sets it)")
     out = search(instance, cells, budget, U=upper, max_states=max_states, max_steps=options.max_steps,
-                 events=run.events, tables=tables, direction=options.direction)
+                 events=run.events, tables=tables, direction=_direction(options, upper))
     return _result(instance, cells, out, upper, incumbent, options, budget)
+
+
+def _direction(options: Options, upper: int | None) -> str:
+    if options.direction != "auto":
+        return options.direction
+    return "forward" if upper is not None else "both"
 
 
 def _result(instance: Instance, cells: Cells, out, upper, incumbent, options: Options, budget) -> Result:
