@@ -1,6 +1,7 @@
 """LaCAM*: complete on a fixed structure, anytime, and the loop's motion layer (every schedule
 goes through the validator; solvability and optima are checked against brute force)."""
 from functools import lru_cache
+from pathlib import Path
 from random import Random
 
 import pytest
@@ -347,3 +348,26 @@ def test_refinement_keeps_schedules_valid_and_never_costlier():
 
     refined = to_result(inst, "lacam", "feasible", steps, stats={})
     assert validate(inst, refined.schedule).valid and sum_of_costs(inst, refined.schedule) == after
+
+
+def test_robots_with_different_point_movesets_get_a_valid_schedule(tmp_path):
+    # one robot may also step diagonally: the SUO paths on the other robots' neighbours would
+    # send it where its own moves do not go (a RuntimeError from a StopIteration before)
+    diagonal = tmp_path / "diagonal.yaml"
+    shipped = Path(__file__).parent.parent / "instances" / "movesets" / "point.yaml"
+    text = shipped.read_text().replace("name: point", "name: diagonal").replace(
+        "  west:        {at: [-1, 0]}\n", "  west:        {at: [-1, 0]}\n  north-east:  {at: [1, -1]}\n")
+    diagonal.write_text(text)
+    inst = make("\n".join(["TTTTTT"] * 6), [{"at": [0, 3], "moveset": str(diagonal)}, {"at": [2, 4]}, {"at": [2, 2]},
+                                            {"at": [4, 4]}, {"at": [0, 0]}],
+                moveset="point", collisions="classic", robot_goals=[[2, 4], [4, 2], [3, 2], [2, 2], [0, 0]])
+    result = solve(inst, "lacam", time_limit=10)
+    assert result.status in ("feasible", "optimal") and validate(inst, result.schedule).valid
+
+
+def test_an_unreachable_goal_is_said_before_any_path_is_spread():
+    # the SUO step reserved a table as long as the unreachable distance: MemoryError before
+    inst = make("TT.TT\nTT.TT", [{"at": [0, 0]}, {"at": [4, 1]}], moveset="point", collisions="classic",
+                robot_goals=[[4, 0], [3, 1]])
+    result = solve(inst, "lacam", time_limit=10)
+    assert result.status == "unsolved" and result.stats["failure"] == "unreachable"
