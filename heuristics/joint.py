@@ -19,6 +19,7 @@ from bille.instances.limits import CHECK_EVERY, check_budget
 from bille.instances.result import Result
 from bille.instances.run import Budget
 from bille.instances.schedule import Schedule
+from bille.instances.successors import backtrack
 from bille.instances.walking import UNREACHABLE, Walk, walk_for
 
 Poses = tuple[int, ...]
@@ -123,37 +124,26 @@ class JointProblem:
 
     def _disjoint_moves(self, options: list[list]):
         """Joint actions whose collision sets are pairwise disjoint (the Bill-E rule)."""
-        m = len(options)
-        actions, nxt = [0] * m, [0] * m
+        def admit(i, option, used, chosen):
+            return used | option[2] if used.isdisjoint(option[2]) else None
 
-        def extend(i: int, used: frozenset):
-            if i == m:
-                yield tuple(actions), tuple(nxt)
-                return
-            for a, q, cells in options[i]:
-                if used.isdisjoint(cells):
-                    actions[i], nxt[i] = a, q
-                    yield from extend(i + 1, used | cells)
-
-        yield from extend(0, frozenset())
+        for chosen in backtrack(options, admit, frozenset()):
+            yield tuple(a for a, _, _ in chosen), tuple(q for _, q, _ in chosen)
 
     def _classic_moves(self, poses: Poses, options: list[list]):
         """Joint actions without vertex or swap conflicts (docs/rules.md, "Classic collisions"; point
         robots, whose pose is their cell)."""
-        m = len(options)
-        actions, nxt = [0] * m, [0] * m
+        at = {p: k for k, p in enumerate(poses)}
 
-        def extend(i: int, ends: frozenset):
-            if i == m:
-                yield tuple(actions), tuple(nxt)
-                return
-            for a, q, _ in options[i]:
-                if q in ends or any(nxt[k] == poses[i] and poses[k] == q != poses[i] for k in range(i)):
-                    continue
-                actions[i], nxt[i] = a, q
-                yield from extend(i + 1, ends | {q})
+        def admit(i, option, ends, chosen):
+            q = option[1]
+            k = at.get(q)
+            if q in ends or (k is not None and k < i and q != poses[i] and chosen[k][1] == poses[i]):
+                return None
+            return ends | {q}
 
-        yield from extend(0, frozenset())
+        for chosen in backtrack(options, admit, frozenset()):
+            yield tuple(a for a, _, _ in chosen), tuple(q for _, q, _ in chosen)
 
     def transition(self, poses: Poses, debts: Debts, nxt: Poses) -> tuple[int, Debts]:
         """Sum-of-costs increment and new debts of a joint step."""

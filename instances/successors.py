@@ -52,16 +52,44 @@ def disjoint_products(instance: Instance, state: State, options: list[list[int]]
     """Joint actions from per-robot ``options`` whose collision sets are pairwise disjoint
     (rule 3), by backtracking."""
     sets = [[(a, collision_cells(instance, state, i, a)) for a in opts] for i, opts in enumerate(options)]
-    chosen: list[int] = []
 
-    def extend(i: int, used: frozenset):
-        if i == len(sets):
+    def admit(i, item, used, chosen):
+        return used | item[1] if used.isdisjoint(item[1]) else None
+
+    for chosen in backtrack(sets, admit, frozenset()):
+        yield tuple(a for a, _ in chosen)
+
+
+def backtrack(options: list[list], admit, start):
+    """Every tuple of one item of each ``options[i]`` in turn that ``admit`` lets through:
+    ``admit(i, item, context, chosen)`` gives the context for the next robot, or None to refuse
+    ``item`` after ``chosen[:i]``. Without recursion, so a thousand robots need no deeper stack.
+
+    >>> list(backtrack([[1, 2], [1, 2]], lambda i, x, used, chosen: None if x in used else used | {x}, frozenset()))
+    [(1, 2), (2, 1)]
+    """
+    m = len(options)
+    if m == 0:
+        yield ()
+        return
+    context = [start] + [None] * m
+    at, chosen, i = [0] * m, [None] * m, 0
+    while i >= 0:
+        if at[i] == len(options[i]):
+            at[i] = 0
+            i -= 1
+            if i >= 0:
+                at[i] += 1
+            continue
+        item = options[i][at[i]]
+        after = admit(i, item, context[i], chosen)
+        if after is None:
+            at[i] += 1
+            continue
+        chosen[i] = item
+        if i == m - 1:
             yield tuple(chosen)
-            return
-        for a, cells in sets[i]:
-            if used.isdisjoint(cells):
-                chosen.append(a)
-                yield from extend(i + 1, used | cells)
-                chosen.pop()
-
-    yield from extend(0, frozenset())
+            at[i] += 1
+        else:
+            context[i + 1] = after
+            i += 1

@@ -41,17 +41,20 @@ BFS_SHARE = 0.5  # of the time limit, at most, for the brute force before anytim
 CBS_SHARE = 0.5  # of the time limit, at most, for conflict-based search before LaCAM* takes over
 
 
-def joint_states(instance: Instance) -> int:
-    """An estimate of the joint states the brute force may meet (module docstring)."""
+def joint_states(instance: Instance) -> float:
+    """An estimate of the joint states the brute force may meet (module docstring); ``inf``
+    beyond what a float holds (a thousand robots)."""
     tiles = instance.start.tiles
-    poses = 1
+    log = 0.0  # summed in logarithms: the product overflows a float from about 150 robots on
     for graph in instance.world.graphs:
         feet = graph.feet
         on_tiles = graph.valid & np.all((feet < 0) | tiles[np.maximum(feet, 0)], axis=1)
-        poses *= 2 * max(1, int(on_tiles.sum()))
+        log += math.log(2 * max(1, int(on_tiles.sum())))
     free = int((~instance.start.obstacles).sum())
     moving = int((instance.start.tiles & ~instance.goal_tiles).sum()) + int(sum(instance.start_state.carrying))
-    return poses * math.comb(free, min(free, moving + 1))
+    k = min(free, moving + 1)
+    log += math.lgamma(free + 1) - math.lgamma(k + 1) - math.lgamma(free - k + 1)
+    return math.exp(log) if log < 700 else math.inf
 
 
 @dataclass(frozen=True)
@@ -84,7 +87,7 @@ def plan(instance: Instance, options: AutoOptions | None = None, run: Run | None
         part = budget.share(BFS_SHARE)
         share = part.left()
         found = bfs.plan(instance, run=run.part(part))
-        why = f"about {size:,} joint states (at most {SMALL:,}): the brute force, with proof"
+        why = f"about {size:,.0f} joint states (at most {SMALL:,}): the brute force, with proof"
         if found.status not in ("timeout", "unsolved"):
             return _told(found, {"method": "bfs", "why": why})
         lower = found.lower_bound

@@ -261,7 +261,7 @@ def test_a_first_run_cut_short_gives_the_first_schedule_with_more_time(monkeypat
     monkeypatch.setattr(anytime.Rise, "step", lambda self, until: None)  # no bound search
     inst = load_instance(bundled_path("reconfig-30"))
     # a time limit far above the seconds the retry needs, and the run stopped at its first schedule
-    result = solve(inst, "anytime", time_limit=60, parallel=False, on_schedule=_stop)
+    result = solve(inst, "anytime", time_limit=60, parallel=False, keep_class=False, on_schedule=_stop)
     assert result.stats["first"]["method"] == "late" and calls == [("late", 2.0)]
     assert result.status == "interrupted" and validate(inst, result.schedule).valid
 

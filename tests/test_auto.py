@@ -105,3 +105,11 @@ def test_a_classic_reconfiguration_goes_to_the_brute_force_whatever_its_size(mon
     result = solve(inst, time_limit=20)
     assert result.stats["auto"]["method"] == "bfs" and result.status == "optimal"
     assert validate(inst, result.schedule).valid
+
+
+def test_the_estimate_of_a_thousand_robots_is_a_number():
+    # the exact product of the robots' poses overflowed a float: OverflowError before
+    from helpers import make
+    robots = [{"at": [x, y]} for y in range(0, 40, 2) for x in range(0, 40, 2)]
+    inst = make("\n".join(["T" * 40] * 40), robots, moveset="point")
+    assert auto.joint_states(inst) == float("inf")

@@ -21,7 +21,7 @@ from bille.solvers import solve, validate
 from bille.solvers.bfs import Options, plan
 from bille.solvers.classes import classes_of
 from bille.solvers.joint.cells import cells_of
-from bille.solvers.joint.search import successors
+from bille.solvers.joint.store import successors
 from bille.solvers.joint.tables import compile_tables
 from helpers import make
 from tinyworlds import tiny_instances
@@ -197,7 +197,8 @@ def test_stopped_search_keeps_a_proved_bound_of_its_class():
     assert capped.lower_bound == capped.stats["depth"] + 1
 
 
-def test_cancel_keeps_the_bound():
+@pytest.mark.parametrize("direction", ["forward", "both"])
+def test_cancel_keeps_the_bound(direction):
     inst = make("\n".join(["T" * 6] * 4), [{"at": [0, 0]}, {"at": [5, 3]}, {"at": [0, 3]}], moveset="point",
                 robot_goals=[[5, 3], [0, 0], [5, 0]])
     budget = Budget()
@@ -206,8 +207,9 @@ def test_cancel_keeps_the_bound():
     def progress(info):
         if next(looks) == 2:
             budget.cancel()
-    got = plan(inst, run=Run(budget, Events(on_progress=progress)))
-    assert got.status == "interrupted" and got.stats["failure"] == "cancelled" and got.lower_bound == 4
+    got = plan(inst, Options(direction=direction), run=Run(budget, Events(on_progress=progress)))
+    assert got.status == "interrupted" and got.stats["failure"] == "cancelled"
+    assert got.lower_bound == got.stats["depth"] + 1 <= bfs(inst).metrics.makespan
 
 
 def test_interchangeable_robots_give_a_valid_schedule():

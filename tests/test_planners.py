@@ -138,3 +138,12 @@ def test_temporal_astar_heeds_its_time_limit_between_replans():
                    budget=Budget(clock=lambda: next(clock)))
     assert result.status == "timeout" and result.stats["failure"] == "time limit"
     assert result.stats["replans"] <= 1
+
+
+def test_joint_astar_takes_a_thousand_classic_robots_without_recursion():
+    # the joint actions were built by one nested generator per robot: RecursionError before
+    robots = [{"at": [x, y]} for y in range(0, 64, 2) for x in range(0, 64, 2)][:1000]
+    inst = make("\n".join(["T" * 64] * 64), robots, moveset="point", collisions="classic",
+                robot_goals=[[r["at"][0] + 1, r["at"][1]] for r in robots])
+    result = solve(inst, "astar", time_limit=1)  # one state has 5**1000 joint actions: the limit ends it
+    assert result.status == "timeout" and result.stats["failure"] == "time limit"

@@ -97,7 +97,8 @@ class AnytimeOptions(MethodOptions):
     search's back end: ``cpsat`` (one worker) or a python-sat name. ``swap``: a window may end
     with interchangeable robots (one moveset, no goal cell) in one another's end states, the
     rest of the schedule permuted to match. ``incumbent``: a schedule to start from instead of
-    the heuristics' (must be valid)."""
+    the heuristics' (must be valid). ``keep_class``: the exact joint search among the schedules
+    that keep the structure after the first schedule (:meth:`_Anytime._keep_class`)."""
 
     METHOD = "anytime"
     window: int = option(8, at_least=2)
@@ -107,6 +108,7 @@ class AnytimeOptions(MethodOptions):
     bound_solver: str = option("cpsat", choices=SOLVERS)
     swap: bool = option(True)
     incumbent: Schedule | None = option(None)
+    keep_class: bool = option(True)
 
 
 def plan(instance: Instance, options: AnytimeOptions | None = None, run: Run | None = None, *,
@@ -129,7 +131,7 @@ def plan(instance: Instance, options: AnytimeOptions | None = None, run: Run | N
         if tell is not None:
             subscribers.append(tell)
     search = _Anytime(instance, bracket, budget, o.window, o.slice, o.parallel, o.solver, o.bound_solver, o.swap,
-                      report)
+                      report, o.keep_class)
     return search.run(bounds, o.incumbent)
 
 
@@ -151,7 +153,8 @@ class _Anytime:
     """One run: the bracket, the parts that narrow it, and the statistics."""
 
     def __init__(self, instance, bracket, budget: Budget, window, slice_s, parallel, solver, bound_solver, swap,
-                 report) -> None:
+                 report, keep_class: bool = True) -> None:
+        self.keep_class = keep_class
         self.instance, self.bracket, self.slice = instance, bracket, slice_s
         self.parallel, self.bound_solver, self.report = parallel, bound_solver, report
         self.budget, self.total = budget, budget.left()  # the run's, and its seconds (inf: no limit)
@@ -280,7 +283,7 @@ class _Anytime:
         says how it ended). The class's optimum is no bound on every schedule: the bracket's lower
         bound is left as it is."""
         inst = self.instance
-        if not inst.is_reconfiguration or self.budget.expired():
+        if not self.keep_class or not inst.is_reconfiguration or self.budget.expired():
             return
         from ..bfs import Options as BfsOptions
         from ..bfs import plan as bfs
@@ -295,7 +298,9 @@ class _Anytime:
             self.stats["class_optima" if got.status == "optimal" else "class_lower_bounds"] = {"keep-structure": lower}
         if got.status == "optimal" and got.schedule is not None:
             found = from_schedule(inst, got.schedule, "bfs (cells=keep)")
-            if found is not None:
+            if found is not None and self.bracket.best is None:
+                self.start_from(found)
+            elif found is not None:
                 self.bracket.offer(found)
 
     def start_from(self, found: Incumbent) -> None:

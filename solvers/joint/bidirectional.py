@@ -17,7 +17,7 @@ each robot with a goal cell on a pose with its front foot there, the others on a
 tiles and apart. Where there are more than :data:`MAX_GOALS`, the search goes forward only.
 
 The schedule is replayed forward through the met state to the goal state the backward path
-ends in (:func:`.search.replay`).
+ends in (:func:`.store.replay`).
 """
 from __future__ import annotations
 
@@ -32,6 +32,7 @@ from bille.instances.run import Budget, Events
 from . import kernel
 from .cells import Cells
 from .compiled import jit, lookup, rehash
+from .store import NO_BOUND, WORK, Outcome, replay, working_arrays
 from .tables import Tables, reverse_tables
 
 MAX_GOALS = 200_000
@@ -97,8 +98,6 @@ class _Side:
 
     def layer(self, budget: Budget, cap: int) -> str:
         """Build the next layer: ``done``, ``time``, ``cancelled`` or ``states``."""
-        from .search import NO_BOUND, WORK
-
         cursor = np.zeros(3, dtype=np.int64)
         cursor[0] = self.lo
         m, L = self.t.m, self.t.L
@@ -131,13 +130,11 @@ class _Side:
 def search_both(instance: Instance, cells: Cells, t: Tables, goals: np.ndarray, budget: Budget, *, U: int | None,
                 max_states: int, max_steps: int | None, events: Events | None):
     """The search from both ends (module docstring); an :class:`.search.Outcome`."""
-    from .search import Outcome, _scratch, replay
-
     n = instance.width * instance.height
     back_t = reverse_tables(instance, t)
     rows = max(2, int(max_states))
-    fwd = _Side(t, rows, t.pack(instance.start_state)[None, :], _scratch(t, n, t.kind.shape[1], t.m, t.L))
-    bwd = _Side(back_t, rows, goals, _scratch(back_t, n, t.kind.shape[1], t.m, t.L))
+    fwd = _Side(t, rows, t.pack(instance.start_state)[None, :], working_arrays(t, n, t.kind.shape[1], t.m, t.L))
+    bwd = _Side(back_t, rows, goals, working_arrays(back_t, n, t.kind.shape[1], t.m, t.L))
     out = Outcome("time", 1)
 
     def ended(stop: str, proved) -> Outcome:

@@ -41,42 +41,18 @@ states (tests/test_joint.py).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
-
 import numpy as np
 
 from bille.instances import Instance
-from bille.instances.rules import State, apply
 from bille.instances.run import Budget, Events
 
 from . import kernel
 from .compiled import rehash
+from .store import NO_BOUND, WORK, Outcome, replay, working_arrays
 from .cells import Cells
 from .tables import Tables, compile_tables
 
-NO_BOUND = 1 << 62
-WORK = 1 << 16  # backtracking steps between two looks at the budget (well under a millisecond)
 TABLE_START = 1 << 12
-
-
-@dataclass
-class Outcome:
-    """How a search ended. ``stop``: ``goal`` (``ids``: a schedule of the class's optimum,
-    ``[m, T]`` action ids), ``exhausted`` (no schedule of the class below ``U``, or none at all
-    without ``U``), ``time``, ``cancelled``, ``states`` (the state cap), ``steps`` (the depth
-    cap). ``proved``: no schedule of the class has a makespan below it (module docstring)."""
-
-    stop: str
-    proved: int
-    ids: np.ndarray | None = None
-    depth: int = 0
-    states: int = 0
-    leaves: int = 0
-    pruned: int = 0
-    layers: list = field(default_factory=list)
-
-    def stats(self) -> dict:
-        return {"states": self.states, "depth": self.depth, "joint_actions": self.leaves, "pruned": self.pruned}
 
 
 def bytes_per_state(tables: Tables) -> int:
@@ -117,7 +93,7 @@ def search(instance: Instance, cells: Cells, budget: Budget, *, U: int | None = 
     table = rehash(states, 1, TABLE_START)
     counters = np.zeros(5, dtype=np.int64)
     counters[kernel.N_STATES] = counters[kernel.N_TABLE] = 1
-    scratch = _scratch(t, n, A, m, L)
+    scratch = working_arrays(t, n, A, m, L)
     lo, hi, depth = 0, 1, 0
     out = Outcome("time", 1)
     while True:
@@ -162,34 +138,6 @@ def _ended(out: Outcome, stop: str, proved, depth: int, counters: np.ndarray) ->
     return out
 
 
-def _scratch(t: Tables, n: int, A: int, m: int, L: int) -> tuple:
-    """The kernel's working arrays (in its order), allocated once per search."""
-    mm = max(m, 1)
-    tiles = np.zeros(n, np.uint8)
-    tiles[:] = t.fixed
-    return (tiles, np.zeros(n, np.int64), np.zeros(n, np.int64), np.zeros(n, np.int64), np.zeros(n, np.int64),
-            np.zeros((mm, A), np.int64), np.zeros(mm, np.int64), np.full(mm, -1, np.int64), np.zeros(mm, np.int64),
-            np.zeros(mm, np.int64), np.zeros(mm, np.int64), np.zeros(mm, np.int64), np.zeros(L, np.int64),
-            np.zeros(n, np.int64), np.zeros(n, np.int64), np.zeros(1, np.int64), np.zeros((mm + 1, max(t.W, 1)), np.int64))
-
-
-def successors(t: Tables, n: int, row: np.ndarray, cap: int = 1 << 16) -> tuple[np.ndarray, np.ndarray]:
-    """Every valid joint action of the state ``row`` and the raw (unsorted) state it leads to,
-    as ``(actions[k, m], rows[k, L])`` (the parity test's view of the kernel)."""
-    m, L, A = t.m, t.L, t.kind.shape[1]
-    scratch = _scratch(t, n, A, m, L)
-    actions = np.zeros((cap, max(m, 1)), np.int64)
-    rows = np.zeros((cap, L), np.int64)
-    counters = np.zeros(5, np.int64)
-    kernel.expand(kernel.COLLECT, row[None, :].copy(), np.zeros(1, np.int64), np.zeros(2, np.int64), counters,
-                  np.zeros(3, np.int64), 1, NO_BOUND, NO_BOUND, 0, NO_BOUND, *t.args(), *scratch, row.copy(),
-                  actions, rows)
-    k = int(counters[kernel.N_STATES])
-    if k > cap:
-        raise ValueError(f"more than {cap} successors")
-    return actions[:k, :m], rows[:k]
-
-
 def _unwind(instance: Instance, t: Tables, states, parent, goal_row: int, scratch) -> np.ndarray:
     """The schedule to the state at ``goal_row`` (module docstring)."""
     path = [goal_row]
@@ -198,25 +146,3 @@ def _unwind(instance: Instance, t: Tables, states, parent, goal_row: int, scratc
     return replay(instance, t, [states[r] for r in path[-2::-1]], scratch)
 
 
-def replay(instance: Instance, t: Tables, rows: list, scratch) -> np.ndarray:
-    """Action ids ``[m, len(rows)]`` of the steps from the start through the (sorted) states
-    ``rows`` in turn, with each robot's own identity: each step is one of the successors of the
-    actual state whose sorted form is the next row, checked by the Python rules."""
-    state = instance.start_state
-    m, L = t.m, t.L
-    steps = []
-    for target in rows:
-        raw = t.pack(state, canonical=False)[None, :]
-        actions = np.zeros((1, max(m, 1)), np.int64)
-        got = kernel.expand(kernel.FIND, raw, np.zeros(1, np.int64), np.zeros(2, np.int64), np.zeros(5, np.int64),
-                            np.zeros(3, np.int64), 1, NO_BOUND, NO_BOUND, 0, NO_BOUND, *t.args(), *scratch,
-                            np.asarray(target).copy(), actions, np.zeros((1, L), np.int64))
-        if got != kernel.GOAL:
-            raise RuntimeError("joint search: a stored state is no successor of the one before it")
-        joint = actions[0, :m].copy()
-        nxt = apply(instance.world, state, joint)
-        if not isinstance(nxt, State):
-            raise RuntimeError(f"joint search: the rebuilt step breaks a rule: {nxt}")
-        steps.append(joint)
-        state = nxt
-    return np.array(steps, dtype=np.int64).T.reshape(m, len(steps))
