@@ -86,7 +86,7 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
                 stats["generated"] += 1
                 heapq.heappush(frontier, (g[0] + epsilon * h[0], g[1] + h[1], next(counter), child))
         except OutOfTime:  # before the expansion, or within it (many robots: millions of children)
-            stats["failure"] = "time limit"
+            stats["failure"] = budget.why()
             return to_result(instance, "astar", "timeout", None, stats=stats)
     stats["failure"] = NO_WALK
     return to_result(instance, "astar", "unsolved", None, stats=stats)

@@ -310,7 +310,7 @@ class _LaCAM:
                 return "unsolved", None, self.stats
             if exhausted:
                 return "exhausted", None, self.stats
-            self.stats["failure"] = "time limit"
+            self.stats["failure"] = self.budget.why()
             return "timeout", None, self.stats
         self.stats["cost"] = self.best.g
         return ("optimal" if exhausted else "feasible"), self._steps(self.best), self.stats

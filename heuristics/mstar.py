@@ -139,7 +139,7 @@ class _MStar:
             *_, node = heapq.heappop(self.frontier)
             if node[0] == "od":  # a partial step: many of them per state with many coupled robots
                 if self.budget.expired():
-                    stats["failure"] = "time limit"
+                    stats["failure"] = self.budget.why()
                     return "timeout", None
                 self.expand_partial(node)
                 continue
@@ -159,7 +159,7 @@ class _MStar:
                     raise OutOfTime
                 self.expand(node)
             except OutOfTime:
-                stats["failure"] = "time limit"
+                stats["failure"] = self.budget.why()
                 return "timeout", None
         stats["failure"] = NO_WALK
         return "unsolved", None

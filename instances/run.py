@@ -83,6 +83,11 @@ class Budget:
         """Whether the time is spent or the run cancelled: where a search stops."""
         return self._flag.set or (self.end is not None and self.clock() >= self.end)
 
+    def why(self) -> str:
+        """Why a search that stopped at its budget stopped: ``interrupted`` (cancelled, Ctrl-C) or
+        ``time limit``; the failure a method writes (``stats.failure``)."""
+        return "interrupted" if self._flag.set else "time limit"
+
     def child(self, seconds: float | None = None) -> Budget:
         """A budget for a part: ``seconds`` from now (None: what is left), never past this one's
         end, cancelled with it."""

@@ -138,7 +138,7 @@ def _result(instance: Instance, cells: Cells, out, upper, incumbent, options: Op
             stats["failure"] = f"no schedule among {cells.name} exists"
             proved = None
     else:
-        failure = {"time": "time limit", "cancelled": "cancelled", "states": f"state cap ({out.states:,} states)",
+        failure = {"time": "time limit", "cancelled": "interrupted", "states": f"state cap ({out.states:,} states)",
                    "steps": "step bound"}[out.stop]
         stats["failure"] = failure
         status = {"time": "timeout", "cancelled": "interrupted"}.get(out.stop, "unsolved")

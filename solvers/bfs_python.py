@@ -97,7 +97,7 @@ def plan(instance: Instance, options, run: Run | None = None) -> Result:
 
 
 def _why(budget) -> str:
-    return "cancelled" if budget.cancelled else "time limit"
+    return budget.why()
 
 
 def _unwind(instance: Instance, parent: dict, state: State) -> Schedule:

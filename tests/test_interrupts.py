@@ -158,3 +158,23 @@ def test_a_ctrl_c_at_a_random_moment_ends_the_solve_interrupted(seed):
         assert result.status == "interrupted", (name, method, result.status)
     if result.schedule is not None:
         assert validate(inst, result.schedule).valid
+
+
+@pytest.mark.parametrize("delay", [0.01, 0.05, 0.15, 0.4])
+def test_a_ctrl_c_while_the_command_line_loads_prints_one_line_and_one_json_object(delay):
+    # before the entry point caught it, a Ctrl-C during the imports printed a traceback, and one
+    # before solve() ran printed no JSON object
+    import json
+    import subprocess
+    import sys
+    import time
+
+    bille = Path(sys.executable).parent / "bille"
+    child = subprocess.Popen([str(bille), "solve", "point-4", "-m", "lacam", "--json"], stdout=subprocess.PIPE,
+                             stderr=subprocess.PIPE, text=True, start_new_session=True,
+                             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    time.sleep(delay)
+    os.killpg(child.pid, signal.SIGINT)
+    out, err = child.communicate(timeout=60)
+    assert child.returncode in (130, 0) and "Traceback" not in err, err
+    assert len([json.loads(line) for line in out.strip().splitlines()]) == 1

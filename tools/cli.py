@@ -13,7 +13,7 @@ import click
 
 from bille.instances import BilleError
 
-from .common import EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE
+from .common import EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE, interrupted_json
 
 COMMANDS = {  # name -> (module, function, the line bille --help shows); each loaded when it runs
     "check": ("files_commands", "check", "Check a schedule against the rules of an instance."),
@@ -76,8 +76,9 @@ def main(argv: list[str] | None = None) -> int:
         message = message[:1].lower() + message[1:]  # one style with every other error line
         click.echo(f"bille: error: {message} (see '{cmd} --help')", err=True)
         code = EXIT_USAGE
-    except click.exceptions.Abort:
+    except (click.exceptions.Abort, KeyboardInterrupt):
         click.echo("bille: interrupted", err=True)
+        interrupted_json(sys.argv[1:] if argv is None else argv)
         code = EXIT_INTERRUPTED
     except BilleError as exc:
         click.echo(f"bille: error: {exc}", err=True)

@@ -67,8 +67,19 @@ def robots(count: int) -> str:
     return f"{count} robot" + ("" if count == 1 else "s")
 
 
+JSON_PRINTED = [False]  # whether this process printed its JSON object (an interrupt then prints none)
+
+
 def print_json(obj) -> None:
     click.echo(json.dumps(obj))
+    JSON_PRINTED[0] = True
+
+
+def interrupted_json(argv: list[str]) -> None:
+    """With ``--json`` among ``argv`` and no JSON object printed yet, the one object of an
+    interrupted command (Ctrl-C before it had anything to say)."""
+    if "--json" in argv and not JSON_PRINTED[0]:
+        print_json({"status": "interrupted", "stats": {"failure": "interrupted before the command finished"}})
 
 
 def stderr_console():

@@ -75,7 +75,8 @@ def solve_(instance: str, method: str, epsilon, horizon, time_limit, threads, lo
     if rrd:  # without a schedule the recording shows the instance
         record_traces([trace_of(inst, result.schedule, method)], rrd, quiet=as_json)
     if as_json:
-        print_json(result.to_json())
+        schedule = None if result.schedule is None else [list(row) for row in result.schedule.actions]
+        print_json({**result.to_json(), "schedule": schedule})
         return exit_code(result)
     click.echo(summary_line(method, result))
     if "auto" in result.stats:

@@ -151,7 +151,7 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
     except (OutOfBudget, Stopped):
         stats["lower_bound_" + objective.replace("-", "_")] = tree.lower
         over = budget.expired()
-        stats["failure"] = "time limit" if over else f"node limit ({max_nodes} expanded)"
+        stats["failure"] = budget.why() if over else f"node limit ({max_nodes} expanded)"
         return Result("cbs", "timeout" if over else "unsolved", stats=stats)
     except KeyboardInterrupt:
         stats["lower_bound_" + objective.replace("-", "_")] = tree.lower

@@ -228,7 +228,7 @@ class Loop:
             if len(s.steps) >= self.max_steps:
                 return stop("step bound")
             if self.budget.expired():
-                return stop("time limit", status="timeout")
+                return stop(self.budget.why(), status="timeout")
             t0 = self.budget.now()
             for robot, k in self.allocation.decide(s):
                 s.assign(robot, k)
@@ -273,7 +273,7 @@ class Loop:
                     motion.forget()
             if joint is None and self.path_planning:
                 step_times.append(self.budget.now() - t0)
-                return stop("time limit", "timeout") if motion.failure == "timeout" else stop(motion.failure)
+                return stop(self.budget.why(), "timeout") if motion.failure == "timeout" else stop(motion.failure)
             if joint is None:
                 return stop(f"{motion.label} found no joint plan ({motion.failure})",
                             status="timeout" if motion.failure == "timeout" else "unsolved")
