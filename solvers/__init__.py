@@ -29,11 +29,11 @@ __all__ = ["Bounds", "Budget", "CLASSIC", "METHODS", "Metrics", "OptionError", "
 _DEFAULT = object()  # time_limit not given: the method's default (its record's time_limit)
 
 
-def solve(instance: Instance, method: str = "auto", progress=None, *, bound: bool = False,
+def solve(instance: Instance | str, method: str = "auto", progress=None, *, bound: bool = False,
           time_limit: float | None = _DEFAULT, budget: Budget | None = None, on_schedule=None, on_bound=None,
           **options) -> Result:
-    """Solve ``instance`` with ``method`` (a key of :data:`METHODS`; ``auto`` picks one by the
-    instance, :mod:`.auto`).
+    """Solve ``instance`` (an :class:`Instance`, or a file's path or a bundled name) with
+    ``method`` (a key of :data:`METHODS`; ``auto`` picks one by the instance, :mod:`.auto`).
 
     ``options`` are the method's (its options class, :mod:`.registry`), checked by type and
     range before anything runs. ``progress``, ``on_schedule`` and ``on_bound`` (callables, or
@@ -75,6 +75,7 @@ def solve(instance: Instance, method: str = "auto", progress=None, *, bound: boo
     >>> solve(inst, "bfs").metrics.makespan
     2
     """
+    instance = _instance(instance)
     if method not in METHODS:
         raise OptionError(f"unknown method '{method}' (expected one of: {', '.join(METHODS)})")
     if instance.collisions == "classic" and method not in CLASSIC:
@@ -95,6 +96,21 @@ def solve(instance: Instance, method: str = "auto", progress=None, *, bound: boo
         result = _dataclasses.replace(result, status="interrupted")
     return _checked(instance, method, result, bounds, bound_s, budget.elapsed(),
                     _raised(None if bounds is None else bounds.classes, result))
+
+
+def _instance(given) -> Instance:
+    """``solve()``'s instance: an :class:`Instance`, or a file's path or a bundled name (read
+    here); anything else is a :class:`TypeError` naming what was given."""
+    import os
+
+    if isinstance(given, Instance):
+        return given
+    if isinstance(given, (str, os.PathLike)):
+        from bille.instances import InstanceError, load_instance
+        from bille.instances.bundled import resolve
+
+        return load_instance(resolve(os.fspath(given), InstanceError))
+    raise TypeError(f"solve() takes an Instance, a file's path or a bundled name, not {type(given).__name__}")
 
 
 def _run(instance: Instance, record, options, budget: Budget, told: Events, bound: bool):

@@ -154,7 +154,7 @@ def test_gap_reads_a_repeated_methods_option_as_one_list(tmp_path, capsys):
 def test_solve_exact_json(capsys, tmp_path):
     code, out, _ = run(capsys, "solve", "crowded-3", "--method", "sat", "--json", "-o", str(tmp_path / "s.yaml"))
     result = json.loads(out)
-    assert code == 0 and set(result) == {"method", "status", "metrics", "lower_bound", "time_s", "stats"}
+    assert code == 0 and set(result) == {"method", "status", "metrics", "lower_bound", "time_s", "stats", "schedule"}
     assert result["status"] == "optimal" and result["metrics"]["makespan"] == result["lower_bound"] == 4
     assert validate(load_instance(bundled_path("crowded-3")), load_schedule(tmp_path / "s.yaml")).valid
 
@@ -237,3 +237,10 @@ def test_one_letter_means_one_thing_and_no_design_file_is_cited():
     root = Path(__file__).resolve().parents[1]
     tracked = subprocess.run(["git", "ls-files", "*.py", "*.md"], cwd=root, capture_output=True, text=True).stdout.split()
     assert not [f for f in tracked if "DESIGN §" in (root / f).read_text(encoding="utf-8") and f != "tests/test_cli.py"]
+
+
+def test_an_option_in_exponent_notation_is_a_number():
+    # YAML reads 1e3 as text: "-O w=1e3" was refused as "not a finite number"
+    from bille.tools.solve_commands import _parse_options
+    assert _parse_options(["w=1e3", "epsilon=2", "name=keep", "x=1.5"]) == {"w": 1000.0, "epsilon": 2, "name": "keep",
+                                                                        "x": 1.5}

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from bille import solvers
-from bille.instances import load_instance
+from bille.instances import InstanceError, load_instance
 from bille.instances.bundled import bundled_path
 from bille.instances.moveset import Moveset
 from bille.instances.result import Result
@@ -51,6 +51,7 @@ def slow_bound(monkeypatch, clock):
         clock.now += seconds[0]
         return Bounds(3, {"slow part": 3}, [])
 
+    import bille.solvers.classes  # noqa: F401  (imported first, it keeps the real bound for the class bounds)
     monkeypatch.setattr("bille.solvers.bounds.lower_bound", lower_bound)
     return asked, seconds
 
@@ -293,3 +294,12 @@ def test_gap_shows_a_bound_from_the_file_as_a_claim_and_never_certifies_with_it(
     assert row["status"] == "optimal" and row["lower_bound"] == row["makespan"] < 99  # the run's own proof
     assert row["certified_gap_percent"] == 0.0
     assert "the file's lower_bound 99 is wrong" in row["note"]
+
+
+def test_solve_takes_a_bundled_name_or_says_what_it_takes():
+    # an AttributeError deep inside before
+    assert solve("compare-4", "cbs").status == "optimal"
+    with pytest.raises(TypeError, match="takes an Instance, a file's path or a bundled name, not int"):
+        solve(3, "cbs")
+    with pytest.raises(InstanceError, match="no such file or bundled name"):
+        solve("no-such-map", "cbs")

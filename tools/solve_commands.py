@@ -140,10 +140,21 @@ def _parse_options(items) -> dict:
         if not sep or not name:
             raise click.BadParameter(f"expected NAME=VALUE, got {item!r}", param_hint="-O/--option")
         try:
-            out[name.replace("-", "_")] = yaml.safe_load(value)
+            out[name.replace("-", "_")] = _number(yaml.safe_load(value))
         except yaml.YAMLError:
             raise click.BadParameter(f"cannot read the value of {item!r}", param_hint="-O/--option") from None
     return out
+
+
+def _number(value):
+    """YAML 1.1 reads ``1e3`` (no dot, no sign) as text: a number written so is a number."""
+    if isinstance(value, str):
+        try:
+            number = float(value)
+        except ValueError:
+            return value
+        return int(number) if number.is_integer() and "." not in value and "e" not in value.lower() else number
+    return value
 
 
 def _explain(inst, key: str, value) -> str:
