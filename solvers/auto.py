@@ -17,11 +17,12 @@ swapping in libMultiRobotPlanning's ``mapf_swap2`` took it 30 s; CBS, 0.01 s).
 
 The size of the joint state space is estimated, not counted (:func:`joint_states`): each robot's
 poses on the start's tiles, with and without a load, times the ways of placing the tiles that
-must move and one more among the free cells (a tile set aside). Measured on random tiny
-instances and the bundled maps (a shared 2-core machine, brute force for 40 s each): every
-instance it finished had an estimate under 10^5 but crowded-3 (3.7 x 10^5 by pose count alone,
-31 s); where it ran out (point-4, compare-2, bridge-2, reconfig-30) the estimate with the tile
-term is 6 x 10^5 and above, so the cut is :data:`SMALL`.
+must move and one more among the free cells (a tile set aside). Measured with the compiled
+search (``bille solve NAME -m bfs --time-limit 20``, 2-core machine): every bundled instance
+with an estimate up to 6.3 x 10^7 is proved in 1.5 s or less (crowded-2, compare-2, corridor-2,
+point-4, crowded-3, compare-3); from 3.5 x 10^8 up (bridge-2, bridge-3, reconfig-30, the
+compare maps with four robots and more) it is not within 20 s, save lt-4 (11 s: the estimate
+counts tiles that never move there), so the cut is :data:`SMALL`.
 """
 from __future__ import annotations
 
@@ -36,7 +37,7 @@ from bille.instances.options import MethodOptions
 from bille.instances.result import Result
 from bille.instances.run import Run
 
-SMALL = 500_000  # estimated joint states up to which the brute force goes first
+SMALL = 100_000_000  # estimated joint states up to which the brute force goes first
 BFS_SHARE = 0.5  # of the time limit, at most, for the brute force before anytime takes over
 CBS_SHARE = 0.5  # of the time limit, at most, for conflict-based search before LaCAM* takes over
 

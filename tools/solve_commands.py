@@ -91,7 +91,7 @@ def solve_(instance: str, method: str, epsilon, horizon, time_limit, threads, lo
         makespan = result.metrics.makespan if result.metrics else None
         for line in report(makespan, result.lower_bound, result.stats["class_bounds"], result.stats.get("classes")):
             click.echo(line)
-    for key in ("unreachable", "failure", "reason", "violation"):
+    for key in ("unreachable", "failure", "stopped", "reason", "violation"):
         if key in result.stats:
             click.echo(f"{key}: {_explain(inst, key, result.stats[key])}")
     if result.stats.get("load_transfer"):

@@ -35,7 +35,7 @@ from .compiled import jit, lookup, rehash
 from .store import NO_BOUND, WORK, Outcome, replay, working_arrays
 from .tables import Tables, reverse_tables
 
-MAX_GOALS = 200_000
+MAX_GOALS = 50_000  # listed in Python: about a second at most
 
 
 def goal_rows(instance: Instance, t: Tables) -> np.ndarray | None:
