@@ -23,7 +23,7 @@ from tinyworlds import tiny_instances
 
 OPTIMA = {}
 for _inst in tiny_instances(16, first_seed=500, max_robots=2):
-    _ref = bfs(_inst, BfsOptions(max_states=20_000))
+    _ref = bfs(_inst, BfsOptions(max_states=20_000, engine="python"))
     if _ref.status == "optimal" and len(OPTIMA) < 6:
         OPTIMA[_inst] = _ref.lower_bound  # the brute force's proved optimum
 SOLVABLE = list(OPTIMA)
@@ -412,7 +412,7 @@ def test_the_scaffold_scenarios_taken_further_raise_the_bound_in_a_child():
     bracket = Bracket(bounds.lower)
     scaffold = Scaffold(bounds.scaffold, bracket, Budget().child(60), 60)
     scaffold.run()
-    assert bracket.lower == 4 == bfs(inst, BfsOptions(max_states=20_000)).lower_bound
+    assert bracket.lower == 4 == bfs(inst, BfsOptions(max_states=20_000, engine="python")).lower_bound
     assert [value for _, value in scaffold.proved] == [4] and not scaffold.pending
 
 

@@ -69,12 +69,12 @@ def test_compiled_successors_are_the_rules_successors(inst):
 
 @functools.cache
 def reference(inst):
-    return bfs(inst, engine="python", max_states=REFERENCE_STATES)
+    return solve(inst, "bfs", time_limit=None, engine="python", max_states=REFERENCE_STATES)
 
 
 def bfs(inst, **options):
-    """The search through solve(): its schedule validated, its metrics measured."""
-    return solve(inst, "bfs", time_limit=None, **options)
+    """The compiled search through solve(): its schedule validated, its metrics measured."""
+    return solve(inst, "bfs", time_limit=None, engine="compiled", **options)
 
 
 def compare_with_reference(instances, direction: str = "forward") -> int:
@@ -207,7 +207,7 @@ def test_cancel_keeps_the_bound(direction):
     def progress(info):
         if next(looks) == 2:
             budget.cancel()
-    got = plan(inst, Options(direction=direction), run=Run(budget, Events(on_progress=progress)))
+    got = plan(inst, Options(direction=direction, engine="compiled"), run=Run(budget, Events(on_progress=progress)))
     assert got.status == "interrupted" and got.stats["failure"] == "interrupted"
     assert got.lower_bound == got.stats["depth"] + 1 <= bfs(inst).metrics.makespan
 

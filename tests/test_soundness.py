@@ -30,7 +30,7 @@ MANY_STATES = 1_500
 
 @functools.cache
 def reference(inst, states: int = MAX_STATES):
-    return bfs(inst, BfsOptions(max_states=states))
+    return bfs(inst, BfsOptions(max_states=states, engine="python"))
 
 
 def check_bounds(instances, states: int = MAX_STATES) -> dict:
