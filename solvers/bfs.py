@@ -97,7 +97,6 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
 
     budget = run.budget.child()
     cells = cells_of(instance, options.cells, options.add_cells or ())
-    tables = compile_tables(instance, cells)
     upper, incumbent = None, None
     if options.incumbent is not None:
         incumbent = bind(instance, options.incumbent)
@@ -107,6 +106,7 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
         if not report.valid:
             raise OptionError(f"bfs: the incumbent is no valid schedule: {report.violation}")
         upper = report.metrics.makespan
+    tables = compile_tables(instance, cells, distances=upper is not None)  # the walks bound only the pruning
     per = bytes_per_state(tables)
     room = min(memory_budget(), address_room())
     cap = int(room // per)

@@ -32,7 +32,7 @@ from bille.instances.run import Budget, Events
 from . import kernel
 from .cells import Cells
 from .compiled import jit, lookup, rehash
-from .store import NO_BOUND, WORK, Outcome, replay, working_arrays
+from .store import NO_BOUND, Outcome, replay, work, working_arrays
 from .tables import Tables, reverse_tables
 
 MAX_GOALS = 50_000  # listed in Python: about a second at most
@@ -103,7 +103,7 @@ class _Side:
         m, L = self.t.m, self.t.L
         while True:
             got = kernel.expand(kernel.SEARCH, self.states, self.parent, self.table, self.counters, cursor, self.hi,
-                                WORK, cap, self.depth, NO_BOUND, *self.t.args(), *self.scratch,
+                                work(self.t), cap, self.depth, NO_BOUND, *self.t.args(), *self.scratch,
                                 self.states[0].copy(), np.zeros((1, max(m, 1)), np.int64), np.zeros((1, L), np.int64))
             if got == kernel.GROW:
                 self.table = rehash(self.states, self.stored, 2 * self.table.shape[0])

@@ -48,7 +48,7 @@ from bille.instances.run import Budget, Events
 
 from . import kernel
 from .compiled import rehash
-from .store import NO_BOUND, WORK, Outcome, replay, working_arrays
+from .store import NO_BOUND, Outcome, replay, work, working_arrays
 from .cells import Cells
 from .tables import Tables, compile_tables
 
@@ -103,7 +103,7 @@ def search(instance: Instance, cells: Cells, budget: Budget, *, U: int | None = 
         cursor = np.zeros(3, dtype=np.int64)
         cursor[0] = lo
         while True:
-            got = kernel.expand(kernel.SEARCH, states, parent, table, counters, cursor, hi, WORK, rows, depth, bound,
+            got = kernel.expand(kernel.SEARCH, states, parent, table, counters, cursor, hi, work(t), rows, depth, bound,
                                 *t.args(), *scratch, row, np.zeros((1, max(m, 1)), np.int64),
                                 np.zeros((1, L), np.int64))
             if got == kernel.GOAL:

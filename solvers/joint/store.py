@@ -14,7 +14,13 @@ from . import kernel
 from .tables import Tables
 
 NO_BOUND = 1 << 62
-WORK = 1 << 16  # backtracking steps between two looks at the budget (well under a millisecond)
+WORK = 1 << 16  # backtracking steps between two looks at the budget, over the robots (a few ms)
+
+
+def work(t: Tables) -> int:
+    """Backtracking steps between two looks at the budget: a step costs about as much as the
+    robots are many (the new state is built at each leaf)."""
+    return 1024 + WORK // max(1, t.m)
 
 
 @dataclass

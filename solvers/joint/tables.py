@@ -91,8 +91,10 @@ class Tables:
         return True
 
 
-def compile_tables(instance: Instance, cells: Cells) -> Tables:
-    """The tables of ``instance`` within the class ``cells``."""
+def compile_tables(instance: Instance, cells: Cells, distances: bool = True) -> Tables:
+    """The tables of ``instance`` within the class ``cells``. ``distances``: each robot's walk to
+    its goal cell as its bound (:func:`_distances`, a search per goal: for the pruning below an
+    incumbent); without, the bound is 1 off the goal cell and 0 on it (what the goal test reads)."""
     world = instance.world
     m, n = instance.num_robots, instance.width * instance.height
     graphs: list = []
@@ -150,7 +152,9 @@ def compile_tables(instance: Instance, cells: Cells) -> Tables:
         if goal >= 0:
             key = (int(gid[i]), goal)
             if key not in cache:
-                cache[key] = _distances(graphs[gid[i]], goal, possible, P)
+                g = graphs[gid[i]]
+                cache[key] = _distances(g, goal, possible, P) if distances else \
+                    np.pad((g.feet[:, 0] != goal).astype(np.int32), (0, P - g.num_poses), constant_values=1)
             dist[i] = cache[key]
     groups: dict = {}
     for i, goal in enumerate(instance.goal_cells):
