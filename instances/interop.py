@@ -45,6 +45,9 @@ def check_portable(inst: Instance, fmt: str) -> None:
         why = "a robot carries a tile"
     elif inst.robot_goals is None or any(g is None for g in inst.robot_goals):
         why = "a robot has no goal cell (every agent needs one)"
+    elif inst.collisions != "classic":
+        why = ("it uses the Bill-E collision rule, and the format means classic MAPF collisions (a robot may "
+               "follow another): read back, it would be another problem with another optimum")
     if why:
         raise InstanceError(f"instance '{inst.name}' cannot be written as {fmt}: {why}")
 

@@ -217,3 +217,18 @@ def test_gen_json_names_the_file_written_or_none(cli, capsys, tmp_path):
     assert said["written_to"] is None and "path" not in said
     assert cli(["gen", "random", "--json", "-o", tmp_path / "r.yaml"]) == 0
     assert json.loads(capsys.readouterr().out)["written_to"] == str(tmp_path / "r.yaml")
+
+
+def test_a_shipped_movingai_map_is_named_and_listed(tmp_path):
+    from pathlib import Path
+    from click.testing import CliRunner
+    from bille.tools.cli import cli
+
+    runner = CliRunner()
+    made = runner.invoke(cli, ["gen", "movingai", "room-32-32-4", "-k", "5", "-o", str(tmp_path / "r.yaml")])
+    assert made.exit_code == 0 and (tmp_path / "r.yaml").exists()
+    listed = runner.invoke(cli, ["list", "--maps"])
+    assert listed.exit_code == 0 and "room-32-32-4" in listed.output and "random-1.scen" in listed.output
+    shipped = Path(__file__).parent.parent / "tools" / "bench" / "movingai" / "room-32-32-4.map"
+    too_many = runner.invoke(cli, ["gen", "movingai", str(shipped), "-k", "5000"])
+    assert too_many.exit_code != 0 and "room for at most 341 agents" in str(too_many.exception or too_many.output)

@@ -127,7 +127,7 @@ def test_scenarios_carry_the_octile_optimum_and_its_bucket(tmp_path, capsys):
 
     # a 9x9 block: (0, 0) to (8, 8) is eight diagonal steps; round the hole no corner is cut
     inst = make("\n".join(["TTTTTTTTT", "TTTTTT.TT"] + ["TTTTTTTTT"] * 7),
-                [{"at": [0, 0]}, {"at": [5, 1]}], moveset="point", robot_goals=[[8, 8], [7, 1]])
+                [{"at": [0, 0]}, {"at": [5, 1]}], moveset="point", robot_goals=[[8, 8], [7, 1]], collisions="classic")
     save_instance(inst, tmp_path / "o.yaml")
     assert cli(capsys, "convert", tmp_path / "o.yaml", tmp_path / "o.scen")[0] == 0
     rows = [r.split("\t") for r in (tmp_path / "o.scen").read_text().splitlines()[1:]]
@@ -322,3 +322,10 @@ def test_a_bound_proved_short_of_the_optimum_is_printed_with_the_schedule(mapf, 
     proved = int(out.split("sum of costs >= ")[1].split(" ")[0])
     shown = int(out.split("sum of costs ")[1].split(",")[0])
     assert proved <= solve(inst, "cbs").stats["sum_of_costs"] <= shown <= 3 * proved
+
+
+def test_an_instance_under_the_bille_rule_is_not_written_as_classic_mapf(tmp_path, capsys):
+    # read back, point-4 came as collisions: classic, a different problem (optimum 9 against 10)
+    for target in ("p4.mrp.yaml", "p4.scen"):
+        code, _, err = cli(capsys, "convert", "point-4", tmp_path / target)
+        assert code == 2 and "Bill-E collision rule" in err and not (tmp_path / target).exists()

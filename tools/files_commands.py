@@ -122,12 +122,23 @@ def write_poses(tr, path: str) -> None:
 
 
 @click.command("list")
-def list_() -> int:
+@click.option("--maps", is_flag=True, help="List the MovingAI maps shipped for bille gen movingai instead.")
+def list_(maps: bool) -> int:
     """List the bundled instances, each with the name of its bundled schedule (a known valid one,
-    usable wherever a schedule file is: bille check corridor-2 corridor-2.schedule)."""
+    usable wherever a schedule file is: bille check corridor-2 corridor-2.schedule); with --maps,
+    the MovingAI maps shipped (bille gen movingai NAME -k AGENTS)."""
+    if maps:
+        from pathlib import Path
+
+        folder = Path(__file__).parent / "bench" / "movingai"
+        for path in sorted(folder.glob("*.map")):
+            scens = sorted(p.name for p in folder.glob(f"{path.stem}-*.scen"))
+            click.echo(f"{path.stem:<24} scenarios: {', '.join(scens) or 'none'}")
+        return EXIT_OK
     for name in bundled_names():
         inst = load_instance(bundled_path(name))
         kind = "reconfiguration" if inst.is_reconfiguration else "path planning"
         click.echo(f"{name:<16} {inst.width}x{inst.height}, {robots(inst.num_robots)}, moveset {inst.moveset.name}, "
                    f"{kind}; schedule {name}{SCHEDULE_SUFFIX}")
+    click.echo("MovingAI maps for bille gen movingai: bille list --maps")
     return EXIT_OK

@@ -137,10 +137,29 @@ def gen_bridges(platforms, size, gap, bays, moved, robots, moveset, tasks, as_js
               help="Classic MAPF collisions (following allowed) or the Bill-E rule (docs/rules.md).")
 @common
 def gen_movingai(map_file, scen, agents, collisions, seed, output, as_json) -> int:
-    """A MovingAI .map (+ .scen) as point robots on an all-tile structure."""
+    """A MovingAI .map (+ .scen) as point robots on an all-tile structure. MAP may name a map
+    shipped with bille (bille list --maps: random-32-32-10, room-32-32-4, ...); its first
+    scenario is then used unless SCEN is given."""
     from bille.instances.generators.movingai import from_movingai
 
+    map_file, scen = shipped_map(map_file, scen)
     return _output(from_movingai(map_file, scen, agents=agents, seed=seed, collisions=collisions), output, as_json)
+
+
+def shipped_map(name: str, scen: str | None) -> tuple[str, str | None]:
+    """``name`` as a path: the file if it exists, else the MovingAI map shipped under that name
+    (with its first scenario when ``scen`` is None)."""
+    from pathlib import Path
+
+    if Path(name).exists():
+        return name, scen
+    folder = Path(__file__).parent / "bench" / "movingai"
+    stem = name[:-4] if name.endswith(".map") else name
+    path = folder / f"{stem}.map"
+    if "/" in stem or not path.is_file():
+        return name, scen
+    first = folder / f"{stem}-random-1.scen"
+    return str(path), scen if scen is not None or not first.is_file() else str(first)
 
 
 def _graph(graph_file, vertices, seed):

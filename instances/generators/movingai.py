@@ -139,9 +139,11 @@ def from_movingai(map_path: str | Path, scen_path: str | Path | None = None, *, 
     else:
         rnd = random.Random(seed)
         cells = [(c % width, c // width) for c in np.flatnonzero(tiles).tolist()]
-        if 2 * agents <= len(cells):
-            chosen = rnd.sample(cells, 2 * agents)
-            pairs = list(zip(chosen[:agents], chosen[agents:]))
+        if 2 * agents > len(cells):
+            raise InstanceError(f"{map_path}: its largest connected part has {len(cells)} cells, room for at most "
+                                f"{len(cells) // 2} agents with distinct start and goal cells; {agents} asked")
+        chosen = rnd.sample(cells, 2 * agents)
+        pairs = list(zip(chosen[:agents], chosen[agents:]))
         source = f"random, seed {seed}"
     if len(pairs) < agents:
         raise InstanceError(f"{map_path}: only {len(pairs)} agents with distinct start and goal cells in the "
