@@ -27,35 +27,18 @@ counts tiles that never move there), so the cut is :data:`SMALL`.
 from __future__ import annotations
 
 import dataclasses
-import math
 from dataclasses import dataclass
-
-import numpy as np
 
 from bille.instances import Instance
 from bille.instances.options import MethodOptions
 from bille.instances.result import Result
 from bille.instances.run import Run
 
+from .estimate import joint_states
+
 SMALL = 100_000_000  # estimated joint states up to which the brute force goes first
 BFS_SHARE = 0.5  # of the time limit, at most, for the brute force before anytime takes over
 CBS_SHARE = 0.5  # of the time limit, at most, for conflict-based search before LaCAM* takes over
-
-
-def joint_states(instance: Instance) -> float:
-    """An estimate of the joint states the brute force may meet (module docstring); ``inf``
-    beyond what a float holds (a thousand robots)."""
-    tiles = instance.start.tiles
-    log = 0.0  # summed in logarithms: the product overflows a float from about 150 robots on
-    for graph in instance.world.graphs:
-        feet = graph.feet
-        on_tiles = graph.valid & np.all((feet < 0) | tiles[np.maximum(feet, 0)], axis=1)
-        log += math.log(2 * max(1, int(on_tiles.sum())))
-    free = int((~instance.start.obstacles).sum())
-    moving = int((instance.start.tiles & ~instance.goal_tiles).sum()) + int(sum(instance.start_state.carrying))
-    k = min(free, moving + 1)
-    log += math.lgamma(free + 1) - math.lgamma(k + 1) - math.lgamma(free - k + 1)
-    return math.exp(log) if log < 700 else math.inf
 
 
 @dataclass(frozen=True)

@@ -120,7 +120,7 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
 
 
 def _tiny(instance: Instance) -> bool:
-    from .auto import joint_states
+    from .estimate import joint_states
 
     return joint_states(instance) <= PYTHON_SMALL
 

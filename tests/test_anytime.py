@@ -180,7 +180,8 @@ def test_the_windows_shorten_a_padded_schedule_to_the_optimum(monkeypatch, solve
     padded = _padded(inst, optimal.schedule, 5)
     assert validate(inst, padded).metrics.makespan == optimal.metrics.makespan + 5
     # the run ends when a window proves the optimum (1-3 s here); the limit is far above that
-    result = solve(inst, "anytime", time_limit=120, parallel=False, incumbent=padded, solver=solver)
+    result = solve(inst, "anytime", time_limit=120, parallel=False, incumbent=padded, solver=solver,
+                   keep_class=False)
     assert result.status in ("optimal", "feasible")
     assert validate(inst, result.schedule).valid
     assert result.metrics.makespan == optimal.metrics.makespan
@@ -272,7 +273,7 @@ def test_with_no_schedule_from_every_robot_the_loop_with_fewer_gives_one(monkeyp
     monkeypatch.setattr(anytime.Rise, "step", lambda self, until: None)  # no bound search
     monkeypatch.setattr(anytime, "complete_search", lambda *args, **kw: pytest.fail("not needed"))
     inst = load_instance(bundled_path("reconfig-30"))
-    result = solve(inst, "anytime", time_limit=5, parallel=False)
+    result = solve(inst, "anytime", time_limit=5, parallel=False, keep_class=False)
     assert "+robots" in result.stats["first"]["method"], result.stats
     assert validate(inst, result.schedule).valid
     _monotone(result.stats, result.stats["first"]["makespan"])

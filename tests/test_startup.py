@@ -26,10 +26,10 @@ sys.__stdout__.write("\\n" + json.dumps(loaded) + "\\n")
 
 def test_light_commands_import_no_solver_library(tmp_path):
     commands = [["--help"], ["list"], ["show", "point-4"], ["check", "point-4", "point-4.schedule"],
-                ["solve", "--help"], ["convert", "point-4", str(tmp_path / "p4.mrp.yaml")]]
+                ["solve", "--help"], ["convert", "point-4", str(tmp_path / "p4.yaml")]]
     done = subprocess.run([sys.executable, "-c", PROBE, json.dumps(commands)], capture_output=True, text=True)
     loaded = json.loads(done.stdout.strip().splitlines()[-1])
-    assert (tmp_path / "p4.mrp.yaml").exists()  # the commands ran
+    assert (tmp_path / "p4.yaml").exists()  # the commands ran
     for argv, modules in zip(commands, loaded):
         heavy = sorted(m for m in modules if any(m == h or m.startswith(h + ".") for h in HEAVY))
         assert not heavy, f"bille {' '.join(argv)} imported {heavy}"

@@ -48,7 +48,8 @@ def row(arg: str, time_limit: float, class_exact: float | None = None) -> dict:
                 first=stats.get("first", {}), free=stats.get("windows", {}).get("shortened", 0),
                 kept=stats.get("kept_windows", {}).get("shortened", 0), time_s=round(result.time_s, 1),
                 class_bounds={k: v.get("lower_bound") for k, v in stats.get("class_bounds", {}).items()},
-                classes=stats.get("classes"), exact=_class_exact(inst, result, class_exact) if class_exact else None)
+                classes=stats.get("classes"), exact=_class_exact(inst, result, class_exact) if class_exact else None,
+                keep_optimum=stats.get("class_optima", {}).get("keep-structure"))
 
 
 def _class_exact(inst, anytime, seconds: float) -> dict | None:
@@ -93,7 +94,7 @@ def table(rows: list[dict]) -> list[str]:
     short = {c.key: c.key[0].upper() for c in CLASSES}
     exact = any(r.get("exact") is not None for r in rows)
     columns = ["instance", "static (part)", "LB", "by", "at s", "makespan", "at s", "first", "free", "kept",
-               "gap"] + [f"LB {short[c.key]}" for c in CLASSES] + ["in", "class gap", "status"] + (
+               "gap"] + [f"LB {short[c.key]}" for c in CLASSES] + ["K opt", "in", "class gap", "status"] + (
         ["N exact", "N best", "N gap", "exact s"] if exact else [])
     body = []
     for r in rows:
@@ -104,15 +105,16 @@ def table(rows: list[dict]) -> list[str]:
         shown = None if r.get("classes") is None else "".join(short[k] for k in r["classes"]) or "-"
         body.append([r["instance"], f"{r['static']} ({r['static_part']})", r["lower"], r["lower_by"], r["lower_s"],
                      r["makespan"], r["best_s"], first, r["free"], r["kept"], _gap(r["makespan"], r["lower"])]
-                    + [bounds.get(c.key) for c in CLASSES] + [shown, within, r["status"]]
+                    + [bounds.get(c.key) for c in CLASSES] + [r.get("keep_optimum"), shown, within, r["status"]]
                     + (_exact_cells(r.get("exact")) if exact else []))
     legend = ", ".join(f"{short[c.key]} {c.name}" for c in CLASSES)
     notes = [f"classes of schedules: {legend}; 'in': those the schedule belongs to; 'class gap': within the "
-             "narrowest of them (not a certified gap)"]
+             "narrowest of them (not a certified gap); 'K opt': the optimum of the schedules that keep the "
+             "structure, decided by anytime's joint search (bille solve -m bfs -O cells=keep)"]
     if exact:
         notes.append("'N exact': the bound for schedules without scaffold with the exact search restricted to them; "
                      "'N best': the shortest such schedule found; 'N gap': between the two ('optimal' where they meet)")
-    return text_table(columns, body, right={"LB", "at s", "makespan", "free", "kept", "gap", "class gap", "N exact",
+    return text_table(columns, body, right={"LB", "at s", "makespan", "free", "kept", "gap", "class gap", "K opt", "N exact",
                                             "N best", "N gap", "exact s"}
                       | {f"LB {short[c.key]}" for c in CLASSES}) + notes
 
