@@ -184,6 +184,12 @@ def from_mrp(data: dict, name: str, src: Source | str | None = None) -> Instance
                 raise src.fail(("agents", k, what), f"({x}, {y}) is not a free cell of the map")
             pair.append((x, y))
         cells.append(pair)
+    for j, what in enumerate(("start", "goal")):  # said in the file's terms, before the instance's own checks
+        seen: dict = {}
+        for k, pair in enumerate(cells):
+            if pair[j] in seen:
+                raise src.fail(("agents", k, what), f"{pair[j]} is also the {what} of agent {names[seen[pair[j]]]}")
+            seen[pair[j]] = k
     grid = Grid.from_masks(width, height, ~free, tiles)
     meta = {"source": "libMultiRobotPlanning"}
     if names != [f"agent{i}" for i in range(len(names))]:

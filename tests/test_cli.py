@@ -244,3 +244,10 @@ def test_an_option_in_exponent_notation_is_a_number():
     from bille.tools.solve_commands import _parse_options
     assert _parse_options(["w=1e3", "epsilon=2", "name=keep", "x=1.5"]) == {"w": 1000.0, "epsilon": 2, "name": "keep",
                                                                         "x": 1.5}
+
+
+def test_methods_options_as_json(cli, capsys):
+    # -O help --json printed text
+    assert cli(["solve", "point-4", "-m", "bfs", "-O", "help", "--json"]) == 0
+    told = json.loads(capsys.readouterr().out)
+    assert told["method"] == "bfs" and "cells" in [o["name"] for o in told["options"]]

@@ -329,3 +329,12 @@ def test_an_instance_under_the_bille_rule_is_not_written_as_classic_mapf(tmp_pat
     for target in ("p4.mrp.yaml", "p4.scen"):
         code, _, err = cli(capsys, "convert", "point-4", tmp_path / target)
         assert code == 2 and "Bill-E collision rule" in err and not (tmp_path / target).exists()
+
+
+def test_agents_sharing_a_goal_are_named_in_the_file(tmp_path, capsys):
+    # the error named robot_goals[1], a field of no file, and no file
+    path = tmp_path / "shared.mrp.yaml"
+    path.write_text("map: {dimensions: [4, 4], obstacles: []}\nagents:\n  - {name: a, start: [0, 0], goal: [3, 3]}\n"
+                    "  - {name: b, start: [1, 0], goal: [3, 3]}\n")
+    code, _, err = cli(capsys, "solve", path, "-m", "cbs")
+    assert code == 2 and "shared.mrp.yaml:4: agents[1].goal: (3, 3) is also the goal of agent a" in err

@@ -18,6 +18,13 @@ def options_of(method: str) -> list[tuple[str, str, str]]:
     return [("time_limit", kind, f"{limit} (> 0 s)"), *record.options().rows()]
 
 
+def described(method: str) -> dict:
+    """The same as :func:`describe`, as one JSON object."""
+    record = METHODS[method]
+    return {"method": method, "plans": record.plans, "proves": record.proves, "classic": record.classic,
+            "options": [{"name": n, "type": kind, "default": default} for n, kind, default in options_of(method)]}
+
+
 def describe(method: str) -> list[str]:
     record = METHODS[method]
     lines = [f"{method}: {record.plans}", f"  proves: {record.proves}",

@@ -49,11 +49,14 @@ def solve_(instance: str, method: str, epsilon, horizon, time_limit, threads, lo
     if time_limit is not None and time_limit <= 0:
         raise click.BadParameter("must be positive", param_hint="--time-limit")
     if "help" in extra:  # -O help: the method's options, nothing solved
-        from .methods_command import describe
+        from .methods_command import describe, described
 
         if method not in METHODS:
             raise click.BadParameter(f"unknown method '{method}' (expected one of: {', '.join(METHODS)})",
                                      param_hint="-m/--method")
+        if as_json:
+            print_json(described(method))
+            return EXIT_OK
         for line in describe(method):
             click.echo(line)
         return EXIT_OK
