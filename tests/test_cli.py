@@ -251,3 +251,13 @@ def test_methods_options_as_json(cli, capsys):
     assert cli(["solve", "point-4", "-m", "bfs", "-O", "help", "--json"]) == 0
     told = json.loads(capsys.readouterr().out)
     assert told["method"] == "bfs" and "cells" in [o["name"] for o in told["options"]]
+
+
+def test_a_flag_looked_for_in_the_wrong_place_says_where_it_lives(cli, capsys):
+    assert cli(["gap", "--jobs", "2"]) == 2
+    assert "runs side by side are bille sweep's (--jobs)" in capsys.readouterr().err
+    assert cli(["solve", "point-4", "--seed", "3"]) == 2
+    assert "-O seed=N" in capsys.readouterr().err
+    assert cli(["list", "--json"]) == 0
+    listed = json.loads(capsys.readouterr().out)
+    assert "point-4" in [i["name"] for i in listed["instances"]] and "room-32-32-4" in listed["maps"]

@@ -66,6 +66,17 @@ def cli() -> None:
     """
 
 
+# flags looked for where they are not, and where what they would do lives
+ELSEWHERE = {
+    "--seed": "a method's seed is an option of the method (-O seed=N: lacam; bille methods METHOD lists them), "
+              "a generator's is bille gen KIND --seed",
+    "--jobs": "runs side by side are bille sweep's (--jobs)",
+    "-j": "runs side by side are bille sweep's (--jobs)",
+    "-v": "there is no verbose mode: --json prints all a run tells (stats), and a terminal shows a live line",
+    "--verbose": "there is no verbose mode: --json prints all a run tells (stats), and a terminal shows a live line",
+}
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``bille`` console script."""
     try:
@@ -74,6 +85,10 @@ def main(argv: list[str] | None = None) -> int:
         cmd = exc.ctx.command_path if exc.ctx else "bille"
         message = exc.format_message().rstrip(".")
         message = message[:1].lower() + message[1:]  # one style with every other error line
+        hint = next((h for flag, h in ELSEWHERE.items() if isinstance(exc, click.NoSuchOption)
+                     and exc.option_name == flag), None)
+        if hint:  # instead of click's guess at a near name
+            message = f"no such option '{exc.option_name}'; {hint}"
         click.echo(f"bille: error: {message} (see '{cmd} --help')", err=True)
         code = EXIT_USAGE
     except (click.exceptions.Abort, KeyboardInterrupt):

@@ -123,14 +123,24 @@ def write_poses(tr, path: str) -> None:
 
 @click.command("list")
 @click.option("--maps", is_flag=True, help="List the MovingAI maps shipped for bille gen movingai instead.")
-def list_(maps: bool) -> int:
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object (instances, maps).")
+def list_(maps: bool, as_json: bool) -> int:
     """List the bundled instances, each with the name of its bundled schedule (a known valid one,
     usable wherever a schedule file is: bille check corridor-2 corridor-2.schedule); with --maps,
     the MovingAI maps shipped (bille gen movingai NAME -k AGENTS)."""
-    if maps:
-        from pathlib import Path
+    from pathlib import Path
 
-        folder = Path(__file__).parent / "bench" / "movingai"
+    folder = Path(__file__).parent / "bench" / "movingai"
+    if as_json:
+        instances = []
+        for name in bundled_names():
+            inst = load_instance(bundled_path(name))
+            instances.append({"name": name, "width": inst.width, "height": inst.height, "robots": inst.num_robots,
+                              "moveset": inst.moveset.name, "reconfiguration": bool(inst.is_reconfiguration),
+                              "schedule": f"{name}{SCHEDULE_SUFFIX}"})
+        print_json({"instances": instances, "maps": sorted(p.stem for p in folder.glob("*.map"))})
+        return EXIT_OK
+    if maps:
         for path in sorted(folder.glob("*.map")):
             scens = sorted(p.name for p in folder.glob(f"{path.stem}-*.scen"))
             click.echo(f"{path.stem:<24} scenarios: {', '.join(scens) or 'none'}")
