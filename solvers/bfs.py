@@ -106,7 +106,8 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
         if not report.valid:
             raise OptionError(f"bfs: the incumbent is no valid schedule: {report.violation}")
         upper = report.metrics.makespan
-    tables = compile_tables(instance, cells, distances=upper is not None)  # the walks bound only the pruning
+    direction = _direction(options, upper)
+    tables = compile_tables(instance, cells, distances=upper is not None)  # the bounds serve the pruning only
     per = bytes_per_state(tables)
     room = min(memory_budget(), address_room())
     cap = int(room // per)
@@ -115,7 +116,7 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
         raise OptionError(f"bfs: max_states {max_states:,} needs about {human(max_states * per)}, more than the "
                           f"{human(room)} this machine allows (BILLE_MEMORY_GIB sets it)")
     out = search(instance, cells, budget, U=upper, max_states=max_states, max_steps=options.max_steps,
-                 events=run.events, tables=tables, direction=_direction(options, upper))
+                 events=run.events, tables=tables, direction=direction)
     return _result(instance, cells, out, upper, incumbent, options, budget)
 
 

@@ -181,6 +181,8 @@ def test_below_an_incumbent_the_optimum_is_found_or_the_incumbent_proved():
         pruned += got.stats["pruned"]
         proved = bfs(inst, incumbent=whole.schedule)  # nothing shorter: the incumbent proved
         assert proved.status == "optimal" and proved.metrics.makespan == whole.metrics.makespan
+        kept = bfs(inst, cells="keep", incumbent=keep.schedule)  # the tile bound on a class's own cells
+        assert kept.status == "optimal" and kept.metrics.makespan == keep.metrics.makespan
         checked += 1
     assert checked >= 15 and pruned > 0
 

@@ -88,7 +88,7 @@ class _Side:
         self.states[:k] = seeds
         size = 1 << max(12, (2 * k).bit_length() + 1)
         self.table = rehash(self.states, k, size)
-        self.counters = np.zeros(5, dtype=np.int64)
+        self.counters = kernel.new_counters()
         self.counters[kernel.N_STATES] = self.counters[kernel.N_TABLE] = k
         self.lo, self.hi, self.depth = 0, k, 0
 

@@ -44,6 +44,11 @@ N_STATES, N_TABLE, GOAL_ROW, LEAVES, PRUNED = 0, 1, 2, 3, 4
 TILE_BITS = 63
 
 
+def new_counters() -> np.ndarray:
+    """The counters :func:`expand` keeps (their indices above)."""
+    return np.zeros(PRUNED + 1, dtype=np.int64)
+
+
 @jit
 def _fits(i, a, g, p, c, classic, coll, carry, succ, target, occ, endocc, startocc, tgt, after):  # pragma: no cover
     """Whether robot ``i``'s action ``a`` is free of collisions with the robots chosen before it
@@ -110,7 +115,7 @@ def _unmark(i, a, g, p, c, classic, coll, carry, succ, target, occ, endocc, tgt)
 def expand(mode, states, parent, table, counters, cursor, hi, work, max_rows, depth, U,
            # the instance's tables (.tables.Tables)
            m, rbits, rpw, nR, nT, width, height, classic, gid, succ, coll, carry, carry_ok, need, target, kind,
-           bit_of, cell_of, fixed, fixed_count, anchor, goal_words, dist, sym_start, sym_idx, masks, W,
+           bit_of, cell_of, fixed, fixed_count, anchor, goal_words, dist, sym_start, sym_idx, masks, W, reach, fetch,
            # scratch, allocated once by the caller
            tiles, occ, endocc, startocc, tgt, cand, ncand, choice, pose, carrying, after, vals, row, seen, stack,
            stamp, usedw,
@@ -297,6 +302,26 @@ def expand(mode, states, parent, table, counters, cursor, hi, work, max_rows, de
                 e = (mis + m - 1) // m if m > 0 else 0
                 if e > h:
                     h = e
+                if reach.shape[0] > 0 and mis > 0:  # each cell off the goal: its pick or place (.tables)
+                    for b in range(cell_of.shape[0]):
+                        has = (row[nR + b // TILE_BITS] >> np.int64(b % TILE_BITS)) & 1
+                        want = (goal_words[b // TILE_BITS] >> np.int64(b % TILE_BITS)) & 1
+                        if has == want:
+                            continue
+                        best = 1 << 30
+                        for i in range(m):
+                            gi = gid[i]
+                            q = vals[i] >> 1
+                            if has == 1:  # a tile to take away: reach, a place first if loaded, pick, a place after
+                                e = reach[b, gi, q] + (vals[i] & 1) + 2
+                            elif (vals[i] & 1) == 1:  # a tile to bring, and this robot holds one: reach, place
+                                e = reach[b, gi, q] + 1
+                            else:  # fetch one first: reach a pick, pick, carry it there, place
+                                e = fetch[b, gi, q]
+                            if e < best:
+                                best = e
+                        if best > h:
+                            h = best
                 if depth + 1 + h >= U:
                     counters[PRUNED] += 1
                     continue

@@ -14,14 +14,22 @@ the class's optimum is at least ``d + 1``; an exhausted search proves the class 
 **Pruning below an upper bound** ``U`` (a schedule known, of makespan ``U``). A state at depth
 ``g`` is dropped when ``g + h >= U``, with
 
-    ``h = max( max_i ( dist_i(pose_i) + carrying_i ),  ceil(mismatch / m) )``
+    ``h = max( max_i ( dist_i(pose_i) + carrying_i ),  ceil(mismatch / m),  max_c tile_c )``
 
 ``dist_i`` (:func:`.tables._distances`) counts the motions robot ``i`` needs to reach a pose with
 its front foot on its goal cell, over the moves whose new feet are on cells that may hold a tile
 in the class (rule 4 puts every foot on a tile, and no other cell ever holds one); a robot that
 carries must besides place its tile, a step without motion; ``mismatch`` counts the cells
 allowed to change whose tile differs from the goal's, and each needs a pick or a place, at most
-one per robot and step. Each term is at most the steps left in any schedule from the state, so
+one per robot and step. ``tile_c``, for each cell ``c`` off the goal (where the class allows at
+most 64 cells to change), is the least over the robots of the steps before that cell is set
+right by that robot: ``reach_c`` (:func:`.tables._transport`: the motions to a pose whose pick
+or place targets ``c``; the pick or place comes from such a pose) and then, for a tile to take
+away, a place first if the robot is loaded (a pick needs empty hands), the pick, and a place
+after it (no robot ends loaded); for a tile to bring, the place, after the fewest steps to get
+a tile if the robot holds none: a pick on some cell allowed to change, reached and done, the
+motions from there to a pose targeting ``c``. Some robot sets ``c`` right, so ``tile_c`` is at
+most the steps left. Each term is at most the steps left in any schedule from the state, so
 a dropped state starts no schedule shorter than ``U``. The first occurrence of a state has the
 least ``g``, so dropping it loses no shorter occurrence. An exhausted search then proves that
 no schedule of the class is shorter than ``U``; stopped early, that none is shorter than
@@ -91,7 +99,7 @@ def search(instance: Instance, cells: Cells, budget: Budget, *, U: int | None = 
     parent = np.zeros(rows, dtype=np.int64)
     states[0] = row
     table = rehash(states, 1, TABLE_START)
-    counters = np.zeros(5, dtype=np.int64)
+    counters = kernel.new_counters()
     counters[kernel.N_STATES] = counters[kernel.N_TABLE] = 1
     scratch = working_arrays(t, n, A, m, L)
     lo, hi, depth = 0, 1, 0
@@ -144,5 +152,6 @@ def _unwind(instance: Instance, t: Tables, states, parent, goal_row: int, scratc
     while path[-1] != 0:
         path.append(int(parent[path[-1]]))
     return replay(instance, t, [states[r] for r in path[-2::-1]], scratch)
+
 
 

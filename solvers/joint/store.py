@@ -61,7 +61,7 @@ def successors(t: Tables, n: int, row: np.ndarray, cap: int = 1 << 16) -> tuple[
     scratch = working_arrays(t, n, A, m, L)
     actions = np.zeros((cap, max(m, 1)), np.int64)
     rows = np.zeros((cap, L), np.int64)
-    counters = np.zeros(5, np.int64)
+    counters = kernel.new_counters()
     kernel.expand(kernel.COLLECT, row[None, :].copy(), np.zeros(1, np.int64), np.zeros(2, np.int64), counters,
                   np.zeros(3, np.int64), 1, NO_BOUND, NO_BOUND, 0, NO_BOUND, *t.args(), *scratch, row.copy(),
                   actions, rows)
@@ -81,7 +81,7 @@ def replay(instance: Instance, t: Tables, rows: list, scratch) -> np.ndarray:
     for target in rows:
         raw = t.pack(state, canonical=False)[None, :]
         actions = np.zeros((1, max(m, 1)), np.int64)
-        got = kernel.expand(kernel.FIND, raw, np.zeros(1, np.int64), np.zeros(2, np.int64), np.zeros(5, np.int64),
+        got = kernel.expand(kernel.FIND, raw, np.zeros(1, np.int64), np.zeros(2, np.int64), kernel.new_counters(),
                             np.zeros(3, np.int64), 1, NO_BOUND, NO_BOUND, 0, NO_BOUND, *t.args(), *scratch,
                             np.asarray(target).copy(), actions, np.zeros((1, L), np.int64))
         if got != kernel.GOAL:

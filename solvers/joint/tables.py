@@ -15,6 +15,9 @@ from . import kernel
 from .cells import Cells
 
 FAR = 1 << 20
+# the tile bound's tables (reach, fetch) where the cells allowed to change are at most this many
+# and its tables small (cells^2 x poses: the fetch table's intermediate)
+TRANSPORT_CELLS, TRANSPORT_SIZE = 64, 40_000_000
 MASK_CELLS = 512  # grids up to this many cells test rule 3 by bit masks (at most 8 words an action)  # the distance bound of a pose from which no goal pose can be reached
 
 
@@ -52,6 +55,8 @@ class Tables:
     sym_idx: np.ndarray
     masks: np.ndarray
     W: int
+    reach: np.ndarray
+    fetch: np.ndarray
 
     @property
     def L(self) -> int:
@@ -62,7 +67,7 @@ class Tables:
         return (self.m, self.rbits, self.rpw, self.nR, self.nT, self.width, self.height, self.classic, self.gid,
                 self.succ, self.coll, self.carry, self.carry_ok, self.need, self.target, self.kind, self.bit_of,
                 self.cell_of, self.fixed, self.fixed_count, self.anchor, self.goal_words, self.dist,
-                self.sym_start, self.sym_idx, self.masks, self.W)
+                self.sym_start, self.sym_idx, self.masks, self.W, self.reach, self.fetch)
 
     def pack(self, state: State, canonical: bool = True) -> np.ndarray:
         """A state as a row of words; ``canonical``: the robots of each symmetry group sorted."""
@@ -166,9 +171,39 @@ def compile_tables(instance: Instance, cells: Cells, distances: bool = True) -> 
     classic = instance.collisions == "classic"
     W = -(-n // 64) if not classic and n <= MASK_CELLS else 0
     masks = _masks(coll, carry, W) if W else np.zeros((1, 1, 1, 2, 1), np.int64)
+    reach = fetch = np.zeros((0, 1, 1), np.int32)
+    if distances and 0 < len(cell_of) <= TRANSPORT_CELLS and len(cell_of) ** 2 * G * P <= TRANSPORT_SIZE:
+        reach, fetch = _transport(graphs, cell_of, possible, P)
     return Tables(m, rbits, rpw, nR, nT, instance.width, instance.height, classic, gid, succ, coll, carry, carry_ok,
                   need, target, kind, bit_of, cell_of, fixed, fixed_count, anchor, goal_words, dist, sym_start,
-                  sym_idx, masks, W)
+                  sym_idx, masks, W, reach, fetch)
+
+
+def _transport(graphs, cell_of: np.ndarray, possible: np.ndarray, P: int) -> tuple[np.ndarray, np.ndarray]:
+    """The tile bound's tables (:mod:`.search`): ``reach[b, g, p]``, the motions from pose ``p``
+    to a pose whose pick or place targets the cell of bit ``b``; ``fetch[b, g, p]``, the steps
+    from ``p`` to a place on that cell for a robot that holds no tile: reach a pick on some cell
+    allowed to change, pick, carry it to a pose targeting ``b`` (the fewest motions between the
+    two, loads not minded), place."""
+    k = len(cell_of)
+    reach = np.full((k, len(graphs), P), FAR, np.int32)
+    fetch = np.full((k, len(graphs), P), FAR, np.int32)
+    for g, graph in enumerate(graphs):
+        manipulating = (graph.kind == kernel.PICK) | (graph.kind == kernel.PLACE)
+        for b, cell in enumerate(cell_of):
+            aims = np.flatnonzero(graph.valid & (graph.target[:, manipulating] == cell).any(axis=1)
+                                  & possible[np.maximum(graph.feet[:, 0], 0)] & possible[np.maximum(graph.feet[:, 1], 0)])
+            reach[b, g] = _distances(graph, -1, possible, P, sources=aims)
+        q = graph.num_poses
+        # between[e, b]: the fewest motions from a pose targeting e to one targeting b
+        between = np.full((k, k), FAR, np.int64)
+        for e in range(k):
+            aims = reach[e, g, :q] == 0
+            if aims.any():
+                between[e] = reach[:, g, :q][:, aims].min(axis=1)
+        total = reach[:, g, :].astype(np.int64)[:, None, :] + between[:, :, None] + 2  # [e, b, p]
+        fetch[:, g, :] = np.minimum(total.min(axis=0), FAR).astype(np.int32)
+    return reach, fetch
 
 
 def reverse_tables(instance: Instance, forward: Tables) -> Tables:
@@ -209,7 +244,8 @@ def reverse_tables(instance: Instance, forward: Tables) -> Tables:
         rtarget[k, q, a] = forward.target[k, p, a]
     masks = _masks(rcoll, rcarry, forward.W) if forward.W else forward.masks
     return dataclasses.replace(forward, succ=rsucc, coll=rcoll, carry=rcarry, carry_ok=rcarry_ok, need=rneed,
-                               target=rtarget, kind=kind, masks=masks, dist=np.ones_like(forward.dist))
+                               target=rtarget, kind=kind, masks=masks, dist=np.ones_like(forward.dist),
+                               reach=np.zeros((0, 1, 1), np.int32), fetch=np.zeros((0, 1, 1), np.int32))
 
 
 def _masks(coll: np.ndarray, carry: np.ndarray, W: int) -> np.ndarray:
@@ -234,7 +270,7 @@ def _masks(coll: np.ndarray, carry: np.ndarray, W: int) -> np.ndarray:
     return masks.view(np.int64)
 
 
-def _distances(graph, goal: int, possible: np.ndarray, P: int) -> np.ndarray:
+def _distances(graph, goal: int, possible: np.ndarray, P: int, sources: np.ndarray | None = None) -> np.ndarray:
     """Each pose's least number of motions to a pose with its front foot on ``goal``, over the
     moves whose new feet are on ``possible`` cells (:data:`FAR` where there is none). A lower
     bound on the steps a robot needs: every pose a schedule of the class takes has its feet on
@@ -250,7 +286,7 @@ def _distances(graph, goal: int, possible: np.ndarray, P: int) -> np.ndarray:
     keep = s != p
     q = graph.num_poses
     # reversed edges (successor -> pose) plus a source q joined to every goal pose
-    goals = np.flatnonzero(graph.valid & (graph.feet[:, 0] == goal))
+    goals = np.flatnonzero(graph.valid & (graph.feet[:, 0] == goal)) if sources is None else sources
     rows = np.concatenate([s[keep], np.full(len(goals), q)])
     cols = np.concatenate([p[keep], goals])
     matrix = csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(q + 1, q + 1))
