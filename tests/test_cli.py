@@ -261,3 +261,15 @@ def test_a_flag_looked_for_in_the_wrong_place_says_where_it_lives(cli, capsys):
     assert cli(["list", "--json"]) == 0
     listed = json.loads(capsys.readouterr().out)
     assert "point-4" in [i["name"] for i in listed["instances"]] and "room-32-32-4" in listed["maps"]
+
+
+def test_gap_csv_never_reads_a_bare_optimal_above_the_proved_optimum(cli, capsys, tmp_path, monkeypatch):
+    # M* and A* prove the least sum of costs over walking-only schedules (14 on point-4), not the
+    # makespan over every schedule (10): their status said "optimal" all the same
+    import csv
+    monkeypatch.chdir(tmp_path)
+    assert cli(["gap", "point-4", "--methods", "cpsat,mstar", "--time-limit", "30"]) == 0
+    rows = list(csv.DictReader((tmp_path / "gap.csv").read_text().splitlines()))
+    proved = min(int(r["makespan"]) for r in rows if r["status"] == "optimal")
+    assert all(int(r["makespan"]) == proved for r in rows if r["status"] == "optimal")
+    assert {r["status"] for r in rows if r["method"] == "mstar"} == {"optimal-sum-of-costs-walking-only"}

@@ -202,6 +202,23 @@ def status_text(result) -> str:
     return shown_status(result.status, result.stats.get("objective"))
 
 
+def status_key(status: str, objective: str | None) -> str:
+    """The status as one word for files (gap.csv, sweeps): ``optimal`` only for the makespan over
+    every schedule; an optimum of another objective or of fewer schedules says which
+    (``optimal-sum-of-costs-walking-only``, ``optimal-in-class``)."""
+    if status != "optimal" or not objective:
+        return status
+    parts = ["optimal"]
+    name = objective.split(" (")[0].split(", then")[0].split(", walking only")[0]
+    if " among " in name or "(cells=" in objective:
+        parts.append("in-class")
+    elif name != "makespan":
+        parts.append(name.replace(" ", "-"))
+    if "walking only" in objective:
+        parts.append("walking-only")
+    return "-".join(parts)
+
+
 def shown_status(status: str, objective: str | None) -> str:
     """:func:`status_text` from a status and the objective it is optimal for (None: the makespan)."""
     if status == "optimal" and objective:

@@ -39,7 +39,7 @@ from bille.instances import BilleError, Instance, OptionError
 from bille.solvers import METHODS, solve, validate
 from bille.solvers.options import check_options
 
-from .common import shown_status
+from .common import shown_status, status_key
 from .tables import text_table
 
 FIELDS = ["instance", "method", "status", "makespan", "own_lower_bound", "lower_bound", "best", "tiles_traveled",
@@ -324,7 +324,7 @@ def write_csv(rows: list[dict], path: Path) -> None:
     buf = io.StringIO()
     w = csv.DictWriter(buf, fieldnames=FIELDS, extrasaction="ignore")
     w.writeheader()
-    w.writerows(rows)
+    w.writerows({**r, "status": status_key(r["status"], r.get("objective"))} for r in rows)
     write_atomic(path, buf.getvalue(), BilleError)
 
 
