@@ -516,3 +516,20 @@ def test_bench_execute_reports_a_fleet_that_is_not_up_in_time_as_a_row(cli, caps
     rows = capsys.readouterr().out.splitlines()[2:]
     assert [r.split()[:3] for r in rows] == [["1", "not", "measured:"], ["2", "not", "measured:"]]
     assert "did not answer within 0.1 s" in rows[0]
+
+
+@pytest.mark.slow
+def test_a_run_interrupted_says_the_step_reached_and_how_to_resume(tmp_path):
+    # it said only "interrupted"
+    journal = tmp_path / "run.journal.jsonl"
+    bille = Path(sys.executable).parent / "bille"
+    child = subprocess.Popen([str(bille), "run", "reconfig-30", "reconfig-30.schedule", "--sim-delay", "700",
+                              "--journal", str(journal)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                             start_new_session=True, preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and not (journal.exists() and '"finished"' in journal.read_text()):
+        time.sleep(0.1)
+    os.killpg(child.pid, signal.SIGINT)
+    _, err = child.communicate(timeout=60)
+    assert child.returncode == 130 and "Traceback" not in err
+    assert f"continue with: bille run --resume {journal}" in err and "interrupted after step " in err

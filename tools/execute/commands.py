@@ -14,7 +14,28 @@ import click
 
 from .outcome import POLICIES, dumps, summary_lines
 
-EXIT_OK, EXIT_NO = 0, 1
+EXIT_OK, EXIT_NO, EXIT_INTERRUPTED = 0, 1, 130
+
+
+def _interrupted(journal: Path, as_json: bool) -> int:
+    """Ctrl-C during a run: the step its journal reached and how to go on from there."""
+    from .session import replay
+
+    try:
+        done = replay(journal)
+    except Exception:  # noqa: BLE001 - no journal, or none yet readable: nothing was finished
+        done = None
+    finished = 0 if done is None else done.finished
+    steps = None if done is None else done.plan.shape[1]
+    if as_json:
+        click.echo(json.dumps({"status": "interrupted", "finished": finished, "steps": steps,
+                               "journal": None if done is None else str(journal)}))
+    elif done is None:
+        click.echo("interrupted before the first step was journaled: nothing to resume", err=True)
+    else:
+        click.echo(f"interrupted after step {finished} of {steps}; continue with: bille run --resume {journal}",
+                   err=True)
+    return EXIT_INTERRUPTED
 
 
 class _Progress:
@@ -119,9 +140,12 @@ def run(instance, schedule, journal_in, replan, broker, bind, robots, secrets_pa
             else:
                 click.echo(f"completed: the run of {path} is finished (all {done.finished} steps); nothing to resume")
             return EXIT_OK
-        with _Progress(not as_json and sys.stderr.isatty(), done.plan.shape[1]) as bar:
-            out = session.resume(journal_in, broker=broker, secrets_path=secrets_path, settings=settings, sims=sims,
-                                 replan=replan, host=bind, progress=bar, done=done)
+        try:
+            with _Progress(not as_json and sys.stderr.isatty(), done.plan.shape[1]) as bar:
+                out = session.resume(journal_in, broker=broker, secrets_path=secrets_path, settings=settings,
+                                     sims=sims, replan=replan, host=bind, progress=bar, done=done)
+        except KeyboardInterrupt:
+            return _interrupted(path, as_json)
     else:
         if not instance or not schedule:
             raise click.UsageError("missing INSTANCE and SCHEDULE (or --resume JOURNAL)")
@@ -136,10 +160,13 @@ def run(instance, schedule, journal_in, replan, broker, bind, robots, secrets_pa
             click.echo(f"warning: {why}; run as --force asks", err=True)
         path = Path(journal or f"{inst.name}-{datetime.now():%Y%m%d-%H%M%S}.journal.jsonl")
         settings["fleet"] = fleet
-        with _Progress(not as_json and sys.stderr.isatty(), sched.length) as bar:
-            out = session.start(inst, str(inst_path), sched, str(sched_path), broker=broker, robots=robots,
-                                secrets_path=secrets_path, journal_path=str(path), settings=settings, sims=sims,
-                                host=bind, progress=bar)
+        try:
+            with _Progress(not as_json and sys.stderr.isatty(), sched.length) as bar:
+                out = session.start(inst, str(inst_path), sched, str(sched_path), broker=broker, robots=robots,
+                                    secrets_path=secrets_path, journal_path=str(path), settings=settings, sims=sims,
+                                    host=bind, progress=bar)
+        except KeyboardInterrupt:
+            return _interrupted(path, as_json)
     if as_json:
         click.echo(dumps(out))
     else:
