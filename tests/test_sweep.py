@@ -257,7 +257,7 @@ def test_gaps_are_measured_against_the_best_bound_of_the_sweep_as_gap_measures_t
     assert by["mstar"]["best_lower_bound"] == 13 and by["mstar"]["certified_gap"] == 0.0
     assert load_table(tmp_path / "out") == sorted(rows, key=lambda r: r["key"])
     line = next(line for line in summary(rows) if line.split()[0] == "mstar")
-    assert line.split()[5:7] == ["0.0%", "0.0%"]  # median and worst gap
+    assert line.split()[6:8] == ["0.0%", "0.0%"]  # median and worst gap
     inst = load_instance(bundled_path("corridor-2"))
     measured = gap.run([inst], gap.parse_configs("mstar,bfs"), 30.0)
     assert [r["certified_gap_percent"] for r in measured] == [0.0, 0.0]
@@ -289,11 +289,14 @@ def test_the_report_says_why_runs_failed(tmp_path):
                     row(2, "anytime", "failed", "error: AssertionError: daemonic processes are not allowed"),
                     row(3, "anytime", "failed", "crashed (signal 9)"),
                     row(1, "astar", "n/a", "instance 'map-1' moves tiles"),
-                    row(1, "cpsat", "optimal", makespan=9, lower=9), row(1, "mstar", "feasible", makespan=8, lower=3)])
+                    row(1, "cpsat", "optimal", makespan=9, lower=9), row(1, "mstar", "feasible", makespan=8, lower=3),
+                    row(2, "mstar", "timeout", "time limit")])
     lines = summary(rows)
     table = {line.split()[0]: line.split() for line in lines[2:8] if line.strip()}
-    assert table["anytime"][1:5] == ["3", "0", "0%", "3"]  # runs, n/a, success, failed
-    assert table["astar"][1:5] == ["1", "1", "-", "0"]
+    assert table["anytime"][1:6] == ["3", "0", "0%", "3", "0"]  # runs, n/a, success, failed, no schedule
+    assert table["astar"][1:6] == ["1", "1", "-", "0", "0"]
+    assert table["mstar"][1:6] == ["2", "0", "50%", "0", "1"]  # "success 50 %" beside "failed 0": named below
+    assert "  1 x timeout (time limit) (first: mstar on map-2)" in lines
     assert "  2 x error: AssertionError: daemonic processes are not allowed (first: anytime on map-1)" in lines
     assert "  1 x crashed (signal 9) (first: anytime on map-3)" in lines
     assert "  1 x instance 'map-1' moves tiles (first: astar on map-1)" in lines

@@ -35,17 +35,29 @@ def summary(rows: list[dict]) -> list[str]:
         failed = sum(r["status"] in FAILED for r in mine)
         body.append([label, len(mine), len(mine) - len(applies),
                      f"{100.0 * len(ok) / len(applies):.0f}%" if applies else None, failed,
+                     len(applies) - len(ok) - failed,
                      f"{statistics.median(gaps):.1f}%" if gaps else None, f"{max(gaps):.1f}%" if gaps else None,
                      f"{statistics.median(times):.3f}" if times else None])
-    right = {"runs", "n/a", "success", "failed", "median certified gap", "worst certified gap", "median time [s]"}
-    out = text_table(["method", "runs", "n/a", "success", "failed", "median certified gap", "worst certified gap",
-                      "median time [s]"],
+    right = {"runs", "n/a", "success", "failed", "no schedule", "median certified gap", "worst certified gap",
+             "median time [s]"}
+    out = text_table(["method", "runs", "n/a", "success", "failed", "no schedule", "median certified gap",
+                      "worst certified gap", "median time [s]"],
                      body, right=right)
     reasons = why(rows)
     if reasons:
         out += ["", "why runs failed or did not apply (each kind of error once, with its count and its first run):"]
         out += [f"  {n} x {_short(first['error'] or 'status ' + first['status'])} (first: {first['label']} on "
                 f"{first['instance']})" for n, first in reasons.values()]
+    unsolved: dict[str, tuple[int, dict]] = {}
+    for r in rows:
+        if r["status"] not in FAILED and r["status"] != "n/a" and not solved(r):
+            kind = r["status"] + (f" ({r['error']})" if r.get("error") else "")
+            n, first = unsolved.get(kind, (0, r))
+            unsolved[kind] = (n + 1, first)
+    if unsolved:
+        out += ["", "runs that ended without a schedule (by how they ended, with their count and their first run):"]
+        out += [f"  {n} x {_short(kind)} (first: {first['label']} on {first['instance']})"
+                for kind, (n, first) in unsolved.items()]
     out += [f"contradiction: {line}" for line in contradictions(rows)]
     return out
 
