@@ -147,3 +147,9 @@ def test_joint_astar_takes_a_thousand_classic_robots_without_recursion():
                 robot_goals=[[r["at"][0] + 1, r["at"][1]] for r in robots])
     result = solve(inst, "astar", time_limit=1)  # one state has 5**1000 joint actions: the limit ends it
     assert result.status == "timeout" and result.stats["failure"] == "time limit"
+
+
+def test_an_absurd_horizon_is_refused_before_anything_runs():
+    # -H 1000000 ran past 120 s at 2.2 GB with a 5 s limit
+    with pytest.raises(OptionError, match="horizon 1,000,000 is more than 10,000 steps"):
+        solve(load_instance(bundled_path("compare-2")), "temporal-astar", horizon=1_000_000, time_limit=5)
