@@ -273,9 +273,12 @@ def test_gap_measures_the_heuristics_against_auto_by_default(tmp_path, cli, caps
     assert all(r["lower_bound"] == optimum for r in rows)  # auto's proof bounds every row
     from bille.tools.gap import table
 
-    shown = {line.split()[1]: line for line in table(rows)[2:]}
+    shown = {line.split()[1]: line for line in table(rows, wide=True)[2:]}
     assert "optimal (sum of costs over walking-only schedules)" in shown["mstar"]
     assert "optimal (sum of costs over walking-only schedules)" in shown["astar"]
+    narrow = table(rows)  # 120 columns: the restricted optima starred and said below the table
+    assert max(len(line) for line in narrow) <= 120
+    assert "* mstar: optimal for sum of costs, then makespan, walking only (no pick or place)" in narrow
 
 
 def test_the_report_says_why_runs_failed(tmp_path):

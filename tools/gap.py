@@ -283,17 +283,28 @@ def _percent(makespan: int, base: int) -> float:
     return round(100.0 * (makespan - base) / base, 1) if base else 0.0
 
 
-def table(rows: list[dict]) -> list[str]:
-    columns = ["instance", "method", "status", "makespan", "LB", "best", "tiles", "time [s]", "gap", "certified",
-               "in class (LB)", "class gap", "note"]
-    return text_table(columns, [[r["instance"], r["method"],
-                                 SHOWN_STATUS.get(r["status"], shown_status(r["status"], r.get("objective"))),
-                                 r["makespan"], r["lower_bound"], r["best"], r["tiles_traveled"],
-                                 _show(r["time_s"], "{:.3f}"), _show(r["gap_percent"], "{:+.1f}%"),
-                                 _show(r["certified_gap_percent"], "<= {:.1f}%"), _in_class(r),
-                                 _show(r["class_gap_percent"], "<= {:.1f}%"), r["note"]]
-                                for r in rows],
-                      right={"makespan", "LB", "best", "tiles", "time [s]", "gap", "certified"})
+def table(rows: list[dict], wide: bool = False) -> list[str]:
+    """The report's table: ``wide``, every column, each status in words; else the columns that
+    fit 120 characters, an optimum of another objective marked ``optimal*`` and said below."""
+    columns = ["instance", "method", "status", "makespan", "LB", "best", "tiles", "time [s]", "gap", "certified"]
+    body = []
+    for r in rows:
+        status = SHOWN_STATUS.get(r["status"], shown_status(r["status"], r.get("objective")))
+        if not wide and status.startswith("optimal ("):
+            status = "optimal*"
+        body.append([r["instance"], r["method"], status, r["makespan"], r["lower_bound"], r["best"],
+                     r["tiles_traveled"], _show(r["time_s"], "{:.3f}"), _show(r["gap_percent"], "{:+.1f}%"),
+                     _show(r["certified_gap_percent"], "<= {:.1f}%")]
+                    + ([_in_class(r), _show(r["class_gap_percent"], "<= {:.1f}%"), r["note"]] if wide else []))
+    out = text_table(columns + (["in class (LB)", "class gap", "note"] if wide else []), body,
+                     right={"makespan", "LB", "best", "tiles", "time [s]", "gap", "certified"})
+    if wide:
+        return out
+    starred = {r["method"]: r["objective"] for r in rows if r["status"] == "optimal" and r.get("objective")}
+    out += [f"* {method}: optimal for {objective}" for method, objective in starred.items()]
+    if any(r["classes"] is not None or r["note"] for r in rows):
+        out.append("--wide shows the classes of schedules and the notes (failures, objectives)")
+    return out
 
 
 def _in_class(r: dict) -> str | None:

@@ -186,8 +186,9 @@ def _explain(inst, key: str, value) -> str:
 @click.option("--rerun", "rrd", type=click.Path(dir_okay=False), metavar="OUT.rrd",
               help="Write every schedule found to one rerun recording, side by side per instance.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of the table.")
+@click.option("--wide", is_flag=True, help="Every column of the table (classes of schedules, notes), wider than 120.")
 def gap(instances, methods: tuple[str, ...], schedule_files, time_limit: float, threads: int, csv_path: str, rrd: str | None,
-        as_json: bool) -> int:
+        as_json: bool, wide: bool) -> int:
     """How far methods are from the optimum: one table over INSTANCES (default: the bundled
     point-4) with each schedule's makespan, the best lower bound proved in the run, and the
     certified gap (makespan - bound) / bound; then a summary per method. An optimum or bound in
@@ -231,7 +232,7 @@ def gap(instances, methods: tuple[str, ...], schedule_files, time_limit: float, 
     if as_json:
         print_json({"rows": rows, "csv": csv_path, "interrupted": interrupted})
     else:
-        for line in table(rows):
+        for line in table(rows, wide):
             click.echo(line)
         click.echo("")
         for line in summary(rows):
