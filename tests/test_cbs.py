@@ -261,3 +261,24 @@ def test_the_robots_a_classic_path_meets_are_all_it_can_conflict_with():
                     assert any(a == b for a, b in zip(rows[0][1:], rows[1][1:])) or any(
                         rows[0][t] == rows[1][t + 1] and rows[0][t + 1] == rows[1][t] != rows[0][t]
                         for t in range(len(rows[0]) - 1))
+
+
+def test_the_root_looks_at_the_clock_between_its_robots(monkeypatch):
+    # a thousand robots: the root planned every robot (10 s) before it looked at a 5 s limit
+    from bille.heuristics.cbs import search as cbs_search
+    from bille.instances.run import Budget
+
+    robots = [{"at": [x, y]} for y in range(0, 20, 2) for x in range(0, 20, 2)]  # 100 robots
+    inst = make("\n".join(["T" * 20] * 20), robots, moveset="point", collisions="classic",
+                robot_goals=[[x + 1, y + 1] for x in range(0, 20, 2) for y in range(0, 20, 2)])
+    planned = []
+    real = cbs_search.Tree.replan
+
+    def counted(self, k, constraints, paths):
+        planned.append(k)
+        return real(self, k, constraints, paths)
+    monkeypatch.setattr(cbs_search.Tree, "replan", counted)
+    clock = iter(range(10**6))  # one second per look
+    result = solve(inst, "cbs", budget=Budget(clock=lambda: next(clock)), time_limit=20)
+    assert result.status == "timeout" and result.stats["failure"] == "time limit"
+    assert len(planned) < 50

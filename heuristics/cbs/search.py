@@ -143,6 +143,8 @@ class Tree:
         if paths is None:
             paths = [None] * m
             for k in range(m):
+                if self.poll is not None and self.poll():  # a thousand robots: seconds of avoidance tables
+                    raise OutOfBudget
                 paths[k] = self.replan(k, constraints[k], paths)
                 if paths[k] is None:
                     return None
