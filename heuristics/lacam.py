@@ -110,7 +110,7 @@ def joint_plan(problem: JointProblem, *, objective: str = "makespan", budget: Bu
     rng = random.Random(seed)
     space = PoseSpace(problem, objective, rng, pinned or {})
     stats = {"objective": f"{objective}, walking only (no pick or place)"}
-    if space.classic and space.one_moveset and not pinned and all(c >= 0 for c in problem.goals) \
+    if space.classic and space.alike and not pinned and all(c >= 0 for c in problem.goals) \
             and not space.unreachable():
         space.spread(budget.share(SCATTER_SHARE), seed)
         stats["scatter_s"] = round(budget.now() - start, 6)
@@ -133,9 +133,9 @@ class PoseSpace:
         self.classic = problem.instance.collisions == "classic"
         self.refining = False  # no refinement (:meth:`refine`) until the SUO paths are set
         self.generator = (Classic if self.classic else Bille)(problem, rng)
-        # the SUO paths and their refinement walk on one set of neighbours: every robot's, only
-        # where all robots walk alike: one moveset, all loaded or none (another robot's moves may not be among them)
-        self.one_moveset = len({id(w) for w in problem.walks}) <= 1
+        # the SUO paths and their refinement walk on one set of neighbours, so only where every
+        # robot walks alike (one moveset, one load): another robot's moves may not be among them
+        self.alike = len({id(w) for w in problem.walks}) <= 1
 
     def spread(self, budget: Budget, seed: int) -> None:
         """Classic collisions: the generator prefers each robot's next cell on its SUO path

@@ -85,8 +85,7 @@ def main(argv: list[str] | None = None) -> int:
         cmd = exc.ctx.command_path if exc.ctx else "bille"
         message = exc.format_message().rstrip(".")
         message = message[:1].lower() + message[1:]  # one style with every other error line
-        hint = next((h for flag, h in ELSEWHERE.items() if isinstance(exc, click.NoSuchOption)
-                     and exc.option_name == flag), None)
+        hint = ELSEWHERE.get(exc.option_name) if isinstance(exc, click.NoSuchOption) else None
         if hint:  # instead of click's guess at a near name
             message = f"no such option '{exc.option_name}'; {hint}"
         click.echo(f"bille: error: {message} (see '{cmd} --help')", err=True)

@@ -144,7 +144,9 @@ def _reporter(bracket: Bracket, progress: Callable) -> Callable:
 
 
 # of the time limit, at most, for the exact search among the schedules that keep the structure
-# (lt-1 to lt-8 and bridge-2 decide it in 0.3-9 s on a 2-core machine), and its state cap
+# (lt-1 to lt-4 and bridge-2 decide it in 0.2-2 s on a 2-core machine; lt-5, lt-7 and lt-8, with
+# three robots, not within a minute: there it takes this share for a bound of the class), and its
+# state cap
 CLASS_SHARE = 0.25
 CLASS_STATES = 20_000_000
 
@@ -154,8 +156,7 @@ class _Anytime:
 
     def __init__(self, instance, bracket, budget: Budget, window, slice_s, parallel, solver, bound_solver, swap,
                  report, keep_class: bool = True) -> None:
-        self.keep_class = keep_class
-        self.instance, self.bracket, self.slice = instance, bracket, slice_s
+        self.instance, self.bracket, self.slice, self.keep_class = instance, bracket, slice_s, keep_class
         self.parallel, self.bound_solver, self.report = parallel, bound_solver, report
         self.budget, self.total = budget, budget.left()  # the run's, and its seconds (inf: no limit)
         self.cut: list = []  # the first schedule's runs that ran out of their share
