@@ -232,3 +232,28 @@ def test_bad_cells_are_named():
         Options.parse({"add_cells": [1, 2]})
     with pytest.raises(OptionError, match="engine python"):
         Options(engine="python", cells="keep")
+
+
+def test_many_robots_without_goals_and_a_small_state_cap_stop_cleanly():
+    # the goal states' count overflowed a float (160 robots), and more goal states than the state
+    # cap did not fit the stores: both went forward only, or stopped at the cap
+    robots = [{"at": [x, y]} for y in range(0, 20) for x in range(0, 20, 2)][:160]
+    inst = make("\n".join(["T" * 19 + "."] + ["T" * 20] * 19), robots, moveset="point",
+                goal="\n".join(["T" * 20] * 19 + ["." + "T" * 19]))
+    got = plan(inst, Options(engine="compiled", max_states=50), run=Run(Budget(5)))
+    assert got.status == "unsolved" and got.stats["failure"].startswith("state cap")
+
+
+def test_a_moveset_whose_pick_carries_cells_goes_forward_only(tmp_path):
+    # steps backwards would count a pick's carried cells with the load after it: not reversible
+    from pathlib import Path
+
+    from bille.solvers.joint.tables import reversible
+    shipped = (Path(__file__).parent.parent / "instances" / "movesets" / "point.yaml").read_text()
+    odd = tmp_path / "odd.yaml"
+    odd.write_text(shipped.replace("name: point", "name: odd").replace(
+        "pick-north:  {at: [0, 0], pick: [0, -1]}", "pick-north:  {at: [0, 0], pick: [0, -1], carried: [[1, 0]]}"))
+    inst = make("TTT.\nTTT.", [{"at": [0, 1]}], moveset=str(odd), goal="TTTT\nTT..")
+    assert not reversible(compile_tables(inst, cells_of(inst, "all")))
+    ref, got = reference(inst), bfs(inst, direction="both")
+    assert ref.status == got.status and (got.metrics is None or got.metrics.makespan == ref.metrics.makespan)

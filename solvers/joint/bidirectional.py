@@ -22,6 +22,7 @@ ends in (:func:`.store.replay`).
 from __future__ import annotations
 
 import itertools
+import math
 
 import numpy as np
 
@@ -32,15 +33,17 @@ from bille.instances.run import Budget, Events
 from . import kernel
 from .cells import Cells
 from .compiled import jit, lookup, rehash
-from .store import NO_BOUND, Outcome, replay, work, working_arrays
+from .store import NO_BOUND, Outcome, new_counters, replay, work, working_arrays
 from .tables import Tables, reverse_tables
 
-MAX_GOALS = 50_000  # listed in Python: about a second at most
+MAX_GOALS = 50_000
+MAX_GOAL_WORK = 20_000_000  # placements x (cells + robots) packed in Python: about a second
 
 
-def goal_rows(instance: Instance, t: Tables) -> np.ndarray | None:
+def goal_rows(instance: Instance, t: Tables, budget: Budget, limit: int = MAX_GOALS) -> np.ndarray | None:
     """Every goal state of the class as a (sorted) row, or None where there are more than
-    :data:`MAX_GOALS` to list."""
+    ``limit`` to list, or more than :data:`MAX_GOAL_WORK` robot placements times cells to pack
+    (listed in Python), or the budget ends first."""
     world = instance.world
     tiles = instance.goal_tiles
     options = []
@@ -50,17 +53,20 @@ def goal_rows(instance: Instance, t: Tables) -> np.ndarray | None:
         if goal >= 0:
             on &= feet[:, 0] == goal
         options.append(np.flatnonzero(on).tolist())
-    if int(np.prod([float(len(o)) for o in options])) > 4 * MAX_GOALS:
+    placements = sum(math.log(max(1, len(o))) for o in options)  # a product overflows from ~150 robots on
+    if limit < 1 or placements > math.log(4 * limit) or math.exp(placements) * (len(t.cell_of) + t.m) > MAX_GOAL_WORK:
         return None
     rows = {}
-    for poses in itertools.product(*options):
+    for n, poses in enumerate(itertools.product(*options)):
+        if n % 1024 == 0 and budget.expired():
+            return None
         cells = [c for i, p in enumerate(poses) for c in set(world.graphs[i].feet[p].tolist())]
         if len(cells) != len(set(cells)):
             continue
         state = State(tiles, tuple(int(p) for p in poses), (False,) * len(poses))
         row = t.pack(state)
         rows[row.tobytes()] = row
-        if len(rows) > MAX_GOALS:
+        if len(rows) > limit:
             return None
     if not rows:
         return np.zeros((0, t.L), np.int64)
@@ -88,7 +94,7 @@ class _Side:
         self.states[:k] = seeds
         size = 1 << max(12, (2 * k).bit_length() + 1)
         self.table = rehash(self.states, k, size)
-        self.counters = kernel.new_counters()
+        self.counters = new_counters()
         self.counters[kernel.N_STATES] = self.counters[kernel.N_TABLE] = k
         self.lo, self.hi, self.depth = 0, k, 0
 
@@ -132,7 +138,7 @@ def search_both(instance: Instance, cells: Cells, t: Tables, goals: np.ndarray, 
     """The search from both ends (module docstring); an :class:`.search.Outcome`."""
     n = instance.width * instance.height
     back_t = reverse_tables(instance, t)
-    rows = max(2, int(max_states))
+    rows = max(2, int(max_states) // 2 + len(goals))  # the two stores within the state cap (and its memory)
     fwd = _Side(t, rows, t.pack(instance.start_state)[None, :], working_arrays(t, n, t.kind.shape[1], t.m, t.L))
     bwd = _Side(back_t, rows, goals, working_arrays(back_t, n, t.kind.shape[1], t.m, t.L))
     out = Outcome("time", 1)
@@ -159,7 +165,7 @@ def search_both(instance: Instance, cells: Cells, t: Tables, goals: np.ndarray, 
             return ended("steps", proved)
         side, other = (fwd, bwd) if fwd.hi - fwd.lo <= bwd.hi - bwd.lo else (bwd, fwd)
         lo = side.hi
-        got = side.layer(budget, max_states - other.stored)
+        got = side.layer(budget, min(rows, max_states - other.stored))
         if got != "done":
             return ended(got, proved)
         a, b = _meet(side.states, lo, side.hi, other.states, other.table)

@@ -44,11 +44,6 @@ N_STATES, N_TABLE, GOAL_ROW, LEAVES, PRUNED = 0, 1, 2, 3, 4
 TILE_BITS = 63
 
 
-def new_counters() -> np.ndarray:
-    """The counters :func:`expand` keeps (their indices above)."""
-    return np.zeros(PRUNED + 1, dtype=np.int64)
-
-
 @jit
 def _fits(i, a, g, p, c, classic, coll, carry, succ, target, occ, endocc, startocc, tgt, after):  # pragma: no cover
     """Whether robot ``i``'s action ``a`` is free of collisions with the robots chosen before it
@@ -129,7 +124,11 @@ def expand(mode, states, parent, table, counters, cursor, hi, work, max_rows, de
     pos = cursor[0]
     steps = 0
     while pos < hi:
+        if cursor[2] == 0 and steps >= work:  # between two states: nothing marked, nothing to undo
+            cursor[0] = pos
+            return PAUSED
         # ---- the state at row pos: robots, tiles, each robot's candidate actions ----------------
+        steps += 1  # a state without successors costs its decoding too
         src = states[pos]
         for i in range(m):
             v = (src[i // rpw] >> np.int64((i % rpw) * rbits)) & rmask

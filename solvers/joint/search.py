@@ -56,7 +56,7 @@ from bille.instances.run import Budget, Events
 
 from . import kernel
 from .compiled import rehash
-from .store import NO_BOUND, Outcome, replay, work, working_arrays
+from .store import NO_BOUND, Outcome, new_counters, replay, work, working_arrays
 from .cells import Cells
 from .tables import Tables, compile_tables
 
@@ -85,9 +85,11 @@ def search(instance: Instance, cells: Cells, budget: Budget, *, U: int | None = 
     if bound <= 0:
         return Outcome("exhausted", bound, states=1)
     if direction == "both":
-        from .bidirectional import goal_rows, search_both
+        from .bidirectional import MAX_GOALS, goal_rows, search_both
+        from .tables import reversible
 
-        goals = goal_rows(instance, t)
+        goals = goal_rows(instance, t, budget, min(MAX_GOALS, int(max_states) // 4)) \
+            if reversible(t) else None
         if goals is not None:
             return search_both(instance, cells, t, goals, budget, U=U, max_states=max_states, max_steps=max_steps,
                                events=events)
@@ -99,7 +101,7 @@ def search(instance: Instance, cells: Cells, budget: Budget, *, U: int | None = 
     parent = np.zeros(rows, dtype=np.int64)
     states[0] = row
     table = rehash(states, 1, TABLE_START)
-    counters = kernel.new_counters()
+    counters = new_counters()
     counters[kernel.N_STATES] = counters[kernel.N_TABLE] = 1
     scratch = working_arrays(t, n, A, m, L)
     lo, hi, depth = 0, 1, 0

@@ -17,10 +17,16 @@ NO_BOUND = 1 << 62
 WORK = 1 << 16  # backtracking steps between two looks at the budget, over the robots (a few ms)
 
 
+def new_counters() -> np.ndarray:
+    """The counters :func:`.kernel.expand` keeps (their indices in :mod:`.kernel`)."""
+    return np.zeros(kernel.PRUNED + 1, dtype=np.int64)
+
+
 def work(t: Tables) -> int:
     """Backtracking steps between two looks at the budget: a step costs about as much as the
-    robots are many (the new state is built at each leaf)."""
-    return 1024 + WORK // max(1, t.m)
+    robots are many (the new state is built at each leaf) and, with a pick or place, as the
+    grid is large (the connectivity flood fill)."""
+    return max(64, (1024 + WORK // max(1, t.m)) // max(1, t.width * t.height // 512))
 
 
 @dataclass
@@ -61,7 +67,7 @@ def successors(t: Tables, n: int, row: np.ndarray, cap: int = 1 << 16) -> tuple[
     scratch = working_arrays(t, n, A, m, L)
     actions = np.zeros((cap, max(m, 1)), np.int64)
     rows = np.zeros((cap, L), np.int64)
-    counters = kernel.new_counters()
+    counters = new_counters()
     kernel.expand(kernel.COLLECT, row[None, :].copy(), np.zeros(1, np.int64), np.zeros(2, np.int64), counters,
                   np.zeros(3, np.int64), 1, NO_BOUND, NO_BOUND, 0, NO_BOUND, *t.args(), *scratch, row.copy(),
                   actions, rows)
@@ -81,7 +87,7 @@ def replay(instance: Instance, t: Tables, rows: list, scratch) -> np.ndarray:
     for target in rows:
         raw = t.pack(state, canonical=False)[None, :]
         actions = np.zeros((1, max(m, 1)), np.int64)
-        got = kernel.expand(kernel.FIND, raw, np.zeros(1, np.int64), np.zeros(2, np.int64), kernel.new_counters(),
+        got = kernel.expand(kernel.FIND, raw, np.zeros(1, np.int64), np.zeros(2, np.int64), new_counters(),
                             np.zeros(3, np.int64), 1, NO_BOUND, NO_BOUND, 0, NO_BOUND, *t.args(), *scratch,
                             np.asarray(target).copy(), actions, np.zeros((1, L), np.int64))
         if got != kernel.GOAL:

@@ -8,7 +8,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bille.instances import Instance
+from bille.instances import Instance, OptionError
+from bille.instances.limits import check_budget
 from bille.instances.rules import State
 
 from . import kernel
@@ -17,7 +18,7 @@ from .cells import Cells
 FAR = 1 << 20
 # the tile bound's tables (reach, fetch) where the cells allowed to change are at most this many
 # and its tables small (cells^2 x poses: the fetch table's intermediate)
-TRANSPORT_CELLS, TRANSPORT_SIZE = 64, 40_000_000
+TRANSPORT_CELLS, TRANSPORT_SIZE = 64, 5_000_000  # the intermediate: 8 bytes each, 40 MB
 MASK_CELLS = 512  # grids up to this many cells test rule 3 by bit masks (at most 8 words an action)  # the distance bound of a pose from which no goal pose can be reached
 
 
@@ -151,6 +152,8 @@ def compile_tables(instance: Instance, cells: Cells, distances: bool = True) -> 
     rpw = max(1, 62 // rbits)
     nR = max(1, -(-m // rpw))
     possible = instance.start.tiles | mask  # the cells that may hold a tile at some step
+    check_budget(8 * m * P, lambda size: f"the joint search: {m} robots' distance tables on {P} poses need {size}",
+                 OptionError)
     dist = np.zeros((m, P), np.int32)
     cache: dict = {}
     for i, goal in enumerate(instance.goal_cells):
@@ -204,6 +207,14 @@ def _transport(graphs, cell_of: np.ndarray, possible: np.ndarray, P: int) -> tup
         total = reach[:, g, :].astype(np.int64)[:, None, :] + between[:, :, None] + 2  # [e, b, p]
         fetch[:, g, :] = np.minimum(total.min(axis=0), FAR).astype(np.int32)
     return reach, fetch
+
+
+def reversible(t: Tables) -> bool:
+    """Whether :func:`reverse_tables` reads the steps backwards exactly: no pick or place has
+    carried-tile cells (the shipped movesets have none; a moveset file may give some, and their
+    cells count with the load before the step, which the step backwards does not hold)."""
+    manipulating = (t.kind == kernel.PICK) | (t.kind == kernel.PLACE)  # [G, A]
+    return not any((t.carry[g][:, manipulating[g]] >= 0).any() for g in range(t.kind.shape[0]))
 
 
 def reverse_tables(instance: Instance, forward: Tables) -> Tables:
