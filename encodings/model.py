@@ -334,7 +334,8 @@ class _Builder:
         m = self.m
         if self.inst.num_robots < 2:
             return
-        feet_of = [g.feet.tolist() for g in self.world.graphs]  # robot -> pose -> its feet' cells
+        shared = {id(g): g.feet.tolist() for g in self.world.graphs}  # once per moveset, not per robot
+        feet_of = [shared[id(g)] for g in self.world.graphs]  # robot -> pose -> its feet' cells
         for t in range(1, self.T + 1):
             self.tick()
             users = defaultdict(lambda: defaultdict(dict))  # cell -> robot -> {(literal, conditional?)}

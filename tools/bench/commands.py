@@ -182,6 +182,20 @@ def bench_exact(time_limit: float, threads: int, only) -> int:
     return EXIT_OK
 
 
+@bench.command("limits")
+@click.option("--time-limit", type=click.FloatRange(min=0.1), default=2.0, show_default=True, help="Seconds per run.")
+@click.option("--methods", default=None, help="Comma-separated methods (default: every method).")
+def bench_limits(time_limit: float, methods: str | None) -> int:
+    """Every method on generated instances of each family (classic and Bill-E, mixed movesets,
+    unreachable goals, a thousand robots) as bille solve --json: one JSON object or one clear
+    line, no traceback, the time limit held (exit 1 if any run broke one of these)."""
+    from bille.solvers import METHODS
+
+    from .limits import report
+
+    return EXIT_NO if report(time_limit, _names(methods) if methods else list(METHODS), click.echo) else EXIT_OK
+
+
 @bench.command("hampath")
 @click.option("--size", type=click.IntRange(2, 40), default=10, show_default=True, help="Largest grid graph side.")
 @click.option("--scale", "-s", type=click.IntRange(min=1), default=1, show_default=True)
