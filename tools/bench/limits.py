@@ -49,8 +49,8 @@ def families(folder: Path) -> dict[str, Path]:
                                                {"at": [4, 4]}], [[2, 4], [4, 2], [2, 2]]),
         "classic-1000": text(["T" * 64] * 64, many, [[r["at"][0] + 1, r["at"][1]] for r in many]),
         "bille-1000": text(["T" * 64] * 64, many, [[r["at"][0] + 1, r["at"][1]] for r in many], collisions="bille"),
-        "bille-reconfiguration": text(["TTTT.", "TTTT."], [{"front": [1, 0], "back": [0, 0]}], collisions="bille",
-                                      goal=[".TTTT", ".TTTT"], moveset="S7"),
+        "bille-reconfiguration": text(["TTTTT", "TTTTT", "....."], [{"front": [1, 1], "back": [0, 1]}],
+                                      collisions="bille", goal=["TTTTT", "TTTT.", "...T."], moveset="S7"),
     }
     out = {}
     for name, inst in made.items():
