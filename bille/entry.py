@@ -18,4 +18,10 @@ def main() -> None:
     from bille.tools.cli import main as command_line
 
     signal.signal(signal.SIGINT, signal.default_int_handler)  # from here on the command's own handling
-    command_line()
+    try:
+        command_line()
+    except KeyboardInterrupt:  # after the command's own handling, before the exit: its answer is out
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        sys.exit(130)
+    finally:  # the exit itself (flushing, clean-ups) is not interrupted
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
