@@ -160,7 +160,7 @@ def test_a_ctrl_c_at_a_random_moment_ends_the_solve_interrupted(seed):
         assert validate(inst, result.schedule).valid
 
 
-@pytest.mark.parametrize("delay", [0.05, 0.1, 0.15, 0.4])  # past the interpreter's own start (~20 ms)
+@pytest.mark.parametrize("delay", [0.08, 0.15, 0.3, 0.5])  # past the interpreter's own start (~20 ms here)
 def test_a_ctrl_c_while_the_command_line_loads_prints_one_line_and_one_json_object(delay):
     # before the entry point caught it, a Ctrl-C during the imports printed a traceback, and one
     # before solve() ran printed no JSON object
@@ -176,5 +176,7 @@ def test_a_ctrl_c_while_the_command_line_loads_prints_one_line_and_one_json_obje
     time.sleep(delay)
     os.killpg(child.pid, signal.SIGINT)
     out, err = child.communicate(timeout=60)
+    if "init_import_site" in err:  # the interpreter's own start, before any of bille's code (a slow machine)
+        pytest.skip("the signal came while Python itself started")
     assert child.returncode in (130, 0) and "Traceback" not in err, err
     assert len([json.loads(line) for line in out.strip().splitlines()]) == 1
