@@ -32,8 +32,8 @@ from bille.instances.run import Budget, Events
 
 from . import kernel
 from .cells import Cells
-from .compiled import jit, lookup, rehash
-from .store import NO_BOUND, Outcome, new_counters, replay, work, working_arrays
+from .compiled import jit, lookup
+from .store import Outcome, Store, replay, working_arrays
 from .tables import Tables, reverse_tables
 
 MAX_GOALS = 50_000
@@ -83,64 +83,14 @@ def _meet(states, lo, hi, other, table):  # pragma: no cover - compiled
     return -1, -1
 
 
-class _Side:
-    """One direction's store: rows, parents, hash table, counters and the current layer."""
-
-    def __init__(self, t: Tables, rows: int, seeds: np.ndarray, scratch) -> None:
-        self.t, self.scratch = t, scratch
-        self.states = np.zeros((rows, t.L), dtype=np.int64)
-        self.parent = np.zeros(rows, dtype=np.int64)  # pages touched only as states are stored
-        k = self.seeds = len(seeds)
-        self.states[:k] = seeds
-        size = 1 << max(12, (2 * k).bit_length() + 1)
-        self.table = rehash(self.states, k, size)
-        self.counters = new_counters()
-        self.counters[kernel.N_STATES] = self.counters[kernel.N_TABLE] = k
-        self.lo, self.hi, self.depth = 0, k, 0
-
-    @property
-    def stored(self) -> int:
-        return int(self.counters[kernel.N_STATES])
-
-    def layer(self, budget: Budget, cap: int) -> str:
-        """Build the next layer: ``done``, ``time``, ``cancelled`` or ``states``."""
-        cursor = np.zeros(3, dtype=np.int64)
-        cursor[0] = self.lo
-        m, L = self.t.m, self.t.L
-        while True:
-            got = kernel.expand(kernel.SEARCH, self.states, self.parent, self.table, self.counters, cursor, self.hi,
-                                work(self.t), cap, self.depth, NO_BOUND, *self.t.args(), *self.scratch,
-                                self.states[0].copy(), np.zeros((1, max(m, 1)), np.int64), np.zeros((1, L), np.int64))
-            if got == kernel.GROW:
-                self.table = rehash(self.states, self.stored, 2 * self.table.shape[0])
-            elif got == kernel.FULL:
-                return "states"
-            elif got == kernel.PAUSED:
-                if budget.expired():
-                    return "cancelled" if budget.cancelled else "time"
-            elif got == kernel.GOAL:  # a goal test of this side's own (ignored: the sides meet instead)
-                continue
-            else:
-                self.lo, self.hi = self.hi, self.stored
-                self.depth += 1
-                return "done"
-
-    def path(self, row: int) -> list[int]:
-        """Rows from this side's seed to ``row``."""
-        out = [row]
-        while out[-1] >= self.seeds:
-            out.append(int(self.parent[out[-1]]))
-        return out[::-1]
-
-
 def search_both(instance: Instance, cells: Cells, t: Tables, goals: np.ndarray, budget: Budget, *, U: int | None,
                 max_states: int, max_steps: int | None, events: Events | None):
     """The search from both ends (module docstring); an :class:`.search.Outcome`."""
     n = instance.width * instance.height
     back_t = reverse_tables(instance, t)
     rows = max(2, int(max_states) // 2 + len(goals))  # the two stores within the state cap (and its memory)
-    fwd = _Side(t, rows, t.pack(instance.start_state)[None, :], working_arrays(t, n, t.kind.shape[1], t.m, t.L))
-    bwd = _Side(back_t, rows, goals, working_arrays(back_t, n, t.kind.shape[1], t.m, t.L))
+    fwd = Store(t, rows, t.pack(instance.start_state)[None, :], working_arrays(t, n, t.kind.shape[1], t.m, t.L))
+    bwd = Store(back_t, rows, goals, working_arrays(back_t, n, t.kind.shape[1], t.m, t.L))
     out = Outcome("time", 1)
 
     def ended(stop: str, proved) -> Outcome:
@@ -166,6 +116,8 @@ def search_both(instance: Instance, cells: Cells, t: Tables, goals: np.ndarray, 
         side, other = (fwd, bwd) if fwd.hi - fwd.lo <= bwd.hi - bwd.lo else (bwd, fwd)
         lo = side.hi
         got = side.layer(budget, min(rows, max_states - other.stored))
+        while got == "goal":  # a goal state stored from the start: the sides meet in this layer
+            got = side.layer(budget, min(rows, max_states - other.stored))
         if got != "done":
             return ended(got, proved)
         a, b = _meet(side.states, lo, side.hi, other.states, other.table)

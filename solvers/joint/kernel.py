@@ -107,6 +107,20 @@ def _unmark(i, a, g, p, c, classic, coll, carry, succ, target, occ, endocc, tgt)
 
 
 @jit
+def _release(level, m, bits, classic, cand, choice, gid, pose, carrying, coll, carry, succ, target, occ, endocc, tgt,
+             startocc):  # pragma: no cover - compiled
+    """Leave a state in the middle of its backtracking: every mark of the robots chosen so far
+    undone (cell marks; the bit masks need none), so the scratch is clean for the next state."""
+    for i in range(level + 1):
+        if choice[i] >= 0 and not bits:
+            _unmark(i, cand[i, choice[i]], gid[i], pose[i], carrying[i], classic, coll, carry, succ, target, occ,
+                    endocc, tgt)
+    if classic:
+        for i in range(m):
+            startocc[pose[i]] = 0
+
+
+@jit
 def expand(mode, states, parent, table, counters, cursor, hi, work, max_rows, depth, U,
            # the instance's tables (.tables.Tables)
            m, rbits, rpw, nR, nT, width, height, classic, gid, succ, coll, carry, carry_ok, need, target, kind,
@@ -192,13 +206,9 @@ def expand(mode, states, parent, table, counters, cursor, hi, work, max_rows, de
         # ---- backtracking over the robots' candidates (rule 3 as they are chosen) ---------------
         while level >= 0:
             if steps >= work or counters[N_STATES] >= max_rows or 2 * counters[N_TABLE] >= table.shape[0]:
-                for i in range(level + 1):  # unmark: the caller may grow the table, then resume here
-                    if choice[i] >= 0 and not bits:
-                        _unmark(i, cand[i, choice[i]], gid[i], pose[i], carrying[i], classic, coll, carry, succ,
-                                target, occ, endocc, tgt)
-                if classic:
-                    for i in range(m):
-                        startocc[pose[i]] = 0
+                # the caller may grow the table, then resume here
+                _release(level, m, bits, classic, cand, choice, gid, pose, carrying, coll, carry, succ, target, occ,
+                         endocc, tgt, startocc)
                 cursor[0] = pos
                 cursor[1] = level
                 cursor[2] = 1
@@ -347,13 +357,8 @@ def expand(mode, states, parent, table, counters, cursor, hi, work, max_rows, de
                 if same:
                     for i in range(m):
                         out_actions[0, i] = cand[i, choice[i]]
-                    for i in range(level + 1):
-                        if choice[i] >= 0 and not bits:
-                            _unmark(i, cand[i, choice[i]], gid[i], pose[i], carrying[i], classic, coll, carry, succ,
-                                    target, occ, endocc, tgt)
-                    if classic:
-                        for i in range(m):
-                            startocc[pose[i]] = 0
+                    _release(level, m, bits, classic, cand, choice, gid, pose, carrying, coll, carry, succ, target,
+                             occ, endocc, tgt, startocc)
                     return GOAL
                 continue
             slot = lookup(states, table, row)
@@ -377,13 +382,8 @@ def expand(mode, states, parent, table, counters, cursor, hi, work, max_rows, de
                         break
             if goal:
                 counters[GOAL_ROW] = r
-                for i in range(level + 1):
-                    if choice[i] >= 0 and not bits:
-                        _unmark(i, cand[i, choice[i]], gid[i], pose[i], carrying[i], classic, coll, carry, succ,
-                                target, occ, endocc, tgt)
-                if classic:
-                    for i in range(m):
-                        startocc[pose[i]] = 0
+                _release(level, m, bits, classic, cand, choice, gid, pose, carrying, coll, carry, succ, target, occ,
+                         endocc, tgt, startocc)
                 cursor[0] = pos + 1
                 cursor[2] = 0
                 return GOAL

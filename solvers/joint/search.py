@@ -55,12 +55,10 @@ from bille.instances import Instance
 from bille.instances.run import Budget, Events
 
 from . import kernel
-from .compiled import rehash
-from .store import NO_BOUND, Outcome, new_counters, replay, work, working_arrays
+from .store import NO_BOUND, Outcome, Store, replay, working_arrays
 from .cells import Cells
 from .tables import Tables, compile_tables
 
-TABLE_START = 1 << 12
 
 
 def bytes_per_state(tables: Tables) -> int:
@@ -93,51 +91,30 @@ def search(instance: Instance, cells: Cells, budget: Budget, *, U: int | None = 
         if goals is not None:
             return search_both(instance, cells, t, goals, budget, U=U, max_states=max_states, max_steps=max_steps,
                                events=events)
-    L, m = t.L, t.m
     n = instance.width * instance.height
-    A = t.kind.shape[1]
     rows = max(2, int(max_states))
-    states = np.zeros((rows, L), dtype=np.int64)  # pages are touched only as states are stored
-    parent = np.zeros(rows, dtype=np.int64)
-    states[0] = row
-    table = rehash(states, 1, TABLE_START)
-    counters = new_counters()
-    counters[kernel.N_STATES] = counters[kernel.N_TABLE] = 1
-    scratch = working_arrays(t, n, A, m, L)
-    lo, hi, depth = 0, 1, 0
+    scratch = working_arrays(t, n, t.kind.shape[1], t.m, t.L)
+    store = Store(t, rows, row[None, :], scratch)
     out = Outcome("time", 1)
     while True:
+        depth = store.depth
         proved = min(depth + 1, bound)
         if max_steps is not None and depth >= max_steps:
-            return _ended(out, "steps", proved, depth, counters)
-        cursor = np.zeros(3, dtype=np.int64)
-        cursor[0] = lo
-        while True:
-            got = kernel.expand(kernel.SEARCH, states, parent, table, counters, cursor, hi, work(t), rows, depth, bound,
-                                *t.args(), *scratch, row, np.zeros((1, max(m, 1)), np.int64),
-                                np.zeros((1, L), np.int64))
-            if got == kernel.GOAL:
-                out = _ended(out, "goal", depth + 1, depth + 1, counters)
-                out.ids = _unwind(instance, t, states, parent, int(counters[kernel.GOAL_ROW]), scratch)
-                return out
-            if got == kernel.GROW:
-                table = rehash(states, int(counters[kernel.N_STATES]), 2 * table.shape[0])
-                continue
-            if got == kernel.FULL:
-                return _ended(out, "states", proved, depth, counters)
-            if got == kernel.PAUSED:
-                if budget.expired():
-                    return _ended(out, "cancelled" if budget.cancelled else "time", proved, depth, counters)
-                continue
-            break
-        lo, hi = hi, int(counters[kernel.N_STATES])
-        depth += 1
+            return _ended(out, "steps", proved, depth, store.counters)
+        got = store.layer(budget, rows, bound)
+        if got == "goal":
+            out = _ended(out, "goal", depth + 1, depth + 1, store.counters)
+            out.ids = _unwind(instance, t, store.states, store.parent, store.goal_row, scratch)
+            return out
+        if got != "done":
+            return _ended(out, got, proved, depth, store.counters)
+        lo, hi = store.lo, store.hi
         out.layers.append(hi - lo)
         if events is not None:
-            events.progress({"class": cells.key, "depth": depth, "states": hi, "layer": hi - lo,
-                             "lower": min(depth + 1, bound), "best": U, "elapsed": budget.elapsed()})
+            events.progress({"class": cells.key, "depth": depth + 1, "states": hi, "layer": hi - lo,
+                             "lower": min(depth + 2, bound), "best": U, "elapsed": budget.elapsed()})
         if lo == hi:
-            return _ended(out, "exhausted", bound if U is not None else math.inf, depth, counters)
+            return _ended(out, "exhausted", bound if U is not None else math.inf, depth + 1, store.counters)
 
 
 def _ended(out: Outcome, stop: str, proved, depth: int, counters: np.ndarray) -> Outcome:

@@ -9,8 +9,10 @@ import numpy as np
 
 from bille.instances import Instance
 from bille.instances.rules import State, apply
+from bille.instances.run import Budget
 
 from . import kernel
+from .compiled import rehash
 from .tables import Tables
 
 NO_BOUND = 1 << 62
@@ -99,3 +101,62 @@ def replay(instance: Instance, t: Tables, rows: list, scratch) -> np.ndarray:
         steps.append(joint)
         state = nxt
     return np.array(steps, dtype=np.int64).T.reshape(m, len(steps))
+
+
+class Store:
+    """The states one search has stored: rows, parents, hash table, counters, and the layer under
+    way (a range of rows; the first layer is the seeds, whose paths start there)."""
+
+    def __init__(self, t: Tables, rows: int, seeds: np.ndarray, scratch) -> None:
+        self.t, self.scratch, self.rows = t, scratch, rows
+        self.states = np.zeros((rows, t.L), dtype=np.int64)  # pages are touched only as states are stored
+        self.parent = np.zeros(rows, dtype=np.int64)
+        k = self.seeds = len(seeds)
+        self.states[:k] = seeds
+        self.table = rehash(self.states, k, 1 << max(12, (2 * k).bit_length() + 1))
+        self.counters = new_counters()
+        self.counters[kernel.N_STATES] = self.counters[kernel.N_TABLE] = k
+        self.lo, self.hi, self.depth = 0, k, 0
+        self.cursor: np.ndarray | None = None  # where the layer under way stands, between calls
+
+    @property
+    def stored(self) -> int:
+        return int(self.counters[kernel.N_STATES])
+
+    @property
+    def goal_row(self) -> int:
+        return int(self.counters[kernel.GOAL_ROW])
+
+    def layer(self, budget: Budget, cap: int, U: int = NO_BOUND) -> str:
+        """Build the next layer below ``U``, or go on with the one under way, with at most ``cap``
+        states stored: ``done`` (the layer is complete), ``goal`` (a goal state was stored, at
+        :attr:`goal_row`; the layer is not complete, and a call goes on with it), ``time``,
+        ``cancelled`` or ``states``."""
+        if self.cursor is None:
+            self.cursor = np.zeros(3, dtype=np.int64)
+            self.cursor[0] = self.lo
+        m, L = self.t.m, self.t.L
+        while True:
+            got = kernel.expand(kernel.SEARCH, self.states, self.parent, self.table, self.counters, self.cursor,
+                                self.hi, work(self.t), cap, self.depth, U, *self.t.args(), *self.scratch,
+                                self.states[0].copy(), np.zeros((1, max(m, 1)), np.int64), np.zeros((1, L), np.int64))
+            if got == kernel.GROW:
+                self.table = rehash(self.states, self.stored, 2 * self.table.shape[0])
+            elif got == kernel.FULL:
+                return "states"
+            elif got == kernel.PAUSED:
+                if budget.expired():
+                    return "cancelled" if budget.cancelled else "time"
+            elif got == kernel.GOAL:
+                return "goal"
+            else:
+                self.lo, self.hi, self.cursor = self.hi, self.stored, None
+                self.depth += 1
+                return "done"
+
+    def path(self, row: int) -> list[int]:
+        """Rows from this store's seed to ``row``."""
+        out = [row]
+        while out[-1] >= self.seeds:
+            out.append(int(self.parent[out[-1]]))
+        return out[::-1]
