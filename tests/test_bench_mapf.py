@@ -4,7 +4,8 @@ import pytest
 
 from bille.instances.generators.movingai import from_movingai
 from bille.solvers import solve, validate
-from bille.tools.bench.mapf import MAPS, SCENARIO, map_names, shipped_maps, sum_of_costs
+from bille.tools.bench.mapf import MAPS, map_names, sum_of_costs
+from bille.tools.bench.maps import SCENARIO, shipped_maps
 from bille.tools.cli import main
 
 

@@ -1,7 +1,6 @@
 """LaCAM*: complete on a fixed structure, anytime, and the loop's motion layer (every schedule
 goes through the validator; solvability and optima are checked against brute force)."""
 from functools import lru_cache
-from pathlib import Path
 from random import Random
 
 import pytest
@@ -12,7 +11,7 @@ from bille.heuristics import lacam_states
 from bille.instances.generators.random import crowded
 from bille.instances.run import Run
 from bille.solvers import solve, validate
-from helpers import make
+from helpers import diagonal_moveset, make
 from refsearch import walking_makespan
 from tinyworlds import tiny_instances
 
@@ -265,7 +264,7 @@ def test_the_compiled_suo_table_gives_the_python_tables_paths(agents, seed):
     from bille.heuristics.pibt import Classic
     from bille.heuristics.scatter import scatter
     from bille.instances.generators.movingai import from_movingai
-    from bille.tools.bench.mapf import shipped_maps
+    from bille.tools.bench.maps import shipped_maps
 
     folder = shipped_maps()
     inst = from_movingai(folder / "room-32-32-4.map", folder / "room-32-32-4-random-1.scen", agents=agents)
@@ -283,7 +282,8 @@ def test_the_compiled_suo_table_gives_the_python_tables_paths(agents, seed):
 def test_suo_makes_lacam_spread_robots_on_a_benchmark_map():
     from bille.heuristics import lacam
     from bille.instances.generators.movingai import from_movingai
-    from bille.tools.bench.mapf import shipped_maps, sum_of_costs
+    from bille.tools.bench.maps import shipped_maps
+    from bille.tools.bench.mapf import sum_of_costs
 
     folder = shipped_maps()
     inst = from_movingai(folder / "random-32-32-10.map", folder / "random-32-32-10-random-1.scen", agents=60)
@@ -304,7 +304,8 @@ def test_refinement_keeps_schedules_valid_and_never_costlier():
 
     from bille.heuristics.refine import Paths, refine_once
     from bille.instances.generators.movingai import from_movingai
-    from bille.tools.bench.mapf import shipped_maps, sum_of_costs
+    from bille.tools.bench.maps import shipped_maps
+    from bille.tools.bench.mapf import sum_of_costs
 
     folder = shipped_maps()
     inst = from_movingai(folder / "room-32-32-4.map", folder / "room-32-32-4-random-1.scen", agents=40)
@@ -353,12 +354,7 @@ def test_refinement_keeps_schedules_valid_and_never_costlier():
 def test_robots_with_different_point_movesets_get_a_valid_schedule(tmp_path):
     # one robot may also step diagonally: the SUO paths on the other robots' neighbours would
     # send it where its own moves do not go (a RuntimeError from a StopIteration before)
-    diagonal = tmp_path / "diagonal.yaml"
-    shipped = Path(__file__).parent.parent / "instances" / "movesets" / "point.yaml"
-    text = shipped.read_text().replace("name: point", "name: diagonal").replace(
-        "  west:        {at: [-1, 0]}\n", "  west:        {at: [-1, 0]}\n  north-east:  {at: [1, -1]}\n")
-    diagonal.write_text(text)
-    inst = make("\n".join(["TTTTTT"] * 6), [{"at": [0, 3], "moveset": str(diagonal)}, {"at": [2, 4]}, {"at": [2, 2]},
+    inst = make("\n".join(["TTTTTT"] * 6), [{"at": [0, 3], "moveset": diagonal_moveset(tmp_path)}, {"at": [2, 4]}, {"at": [2, 2]},
                                             {"at": [4, 4]}, {"at": [0, 0]}],
                 moveset="point", collisions="classic", robot_goals=[[2, 4], [4, 2], [3, 2], [2, 2], [0, 0]])
     result = solve(inst, "lacam", time_limit=10)

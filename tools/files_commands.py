@@ -128,9 +128,9 @@ def list_(maps: bool, as_json: bool) -> int:
     """List the bundled instances, each with the name of its bundled schedule (a known valid one,
     usable wherever a schedule file is: bille check corridor-2 corridor-2.schedule); with --maps,
     the MovingAI maps shipped (bille gen movingai NAME -k AGENTS)."""
-    from pathlib import Path
+    from .bench.maps import shipped_maps
 
-    folder = Path(__file__).parent / "bench" / "movingai"
+    folder = shipped_maps()
     if as_json:
         instances = []
         for name in bundled_names():

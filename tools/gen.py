@@ -151,14 +151,16 @@ def shipped_map(name: str, scen: str | None) -> tuple[str, str | None]:
     (with its first scenario when ``scen`` is None)."""
     from pathlib import Path
 
+    from .bench.maps import SCENARIO, shipped_maps
+
     if Path(name).exists():
         return name, scen
-    folder = Path(__file__).parent / "bench" / "movingai"
+    folder = shipped_maps()
     stem = name[:-4] if name.endswith(".map") else name
     path = folder / f"{stem}.map"
     if "/" in stem or not path.is_file():
         return name, scen
-    first = folder / f"{stem}-random-1.scen"
+    first = folder / f"{stem}{SCENARIO}"
     return str(path), scen if scen is not None or not first.is_file() else str(first)
 
 

@@ -299,7 +299,8 @@ def bench_mapf(folder: str | None, names: str | None, agents: str, time_limit: f
     --optimal, the exact methods' proofs and times."""
     from pathlib import Path
 
-    from .mapf import MAPS, map_names, mapf_rows, mapf_table, shipped_maps
+    from .maps import shipped_maps
+    from .mapf import MAPS, map_names, mapf_rows, mapf_table
     from .peers import available, peer_at, peers_table
 
     if optimal and (peers or against):

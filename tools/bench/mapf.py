@@ -12,7 +12,6 @@ Scale: S7 robots with random goal cells on a fully tiled square: time to the fir
 from __future__ import annotations
 
 import random
-from importlib import resources
 from pathlib import Path
 
 import numpy as np
@@ -25,20 +24,12 @@ from bille.instances.walking import walk_for
 from bille.solvers import solve
 
 from ..common import solved
+from .maps import SCENARIO
 from ..tables import text_table
 from .core import north_facing
 
 MAPS = ("random-32-32-10", "room-32-32-4", "warehouse-10-20-10-2-1", "random-64-64-20")
 AGENTS = (50, 100, 200, 300, 400)
-SCENARIO = "-random-1.scen"  # NAME.map is read with NAME-random-1.scen
-
-
-def shipped_maps() -> Path:
-    """The folder of the MovingAI maps and scenarios shipped with bille (:data:`MAPS`; see its
-    README for their source and licence)."""
-    return Path(str(resources.files("bille.tools.bench").joinpath("movingai")))
-
-
 def map_names(folder: Path) -> list[str]:
     """The maps of ``folder`` that have a ``random-1`` scenario, sorted."""
     return sorted(p.name[: -len(SCENARIO)] for p in folder.glob(f"*{SCENARIO}") if (folder / p.name.replace(
