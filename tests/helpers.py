@@ -57,3 +57,15 @@ def split_with_and_without(inst, kind: str, max_nodes: int):
         return None
     assert result.status == "optimal" and validate(inst, result.schedule).valid
     return result, solve(inst, "cbs", time_limit=None, max_nodes=max_nodes, **{kind: False})
+
+
+def diagonal_moveset(folder) -> str:
+    """A point moveset file in ``folder`` (returned as a path) that also steps north-east: beside
+    the shipped ``point``, robots of two movesets."""
+    from pathlib import Path
+
+    shipped = Path(__file__).parent.parent / "instances" / "movesets" / "point.yaml"
+    path = Path(folder) / "diagonal.yaml"
+    path.write_text(shipped.read_text().replace("name: point", "name: diagonal").replace(
+        "  west:        {at: [-1, 0]}\n", "  west:        {at: [-1, 0]}\n  north-east:  {at: [1, -1]}\n"))
+    return str(path)

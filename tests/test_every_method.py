@@ -8,18 +8,8 @@ import pytest
 from bille.instances import BilleError
 from bille.instances.result import STATUSES
 from bille.solvers import METHODS, solve, validate
-from helpers import make
+from helpers import diagonal_moveset, make
 from tinyworlds import tiny_instances
-
-
-def _diagonal(tmp_path):
-    from pathlib import Path
-
-    shipped = Path(__file__).parent.parent / "instances" / "movesets" / "point.yaml"
-    path = tmp_path / "diagonal.yaml"
-    path.write_text(shipped.read_text().replace("name: point", "name: diagonal").replace(
-        "  west:        {at: [-1, 0]}\n", "  west:        {at: [-1, 0]}\n  north-east:  {at: [1, -1]}\n"))
-    return str(path)
 
 
 def families(tmp_path) -> dict:
@@ -27,7 +17,7 @@ def families(tmp_path) -> dict:
     return {
         "classic, unreachable goal": make("TT.TT\nTT.TT", [{"at": [0, 0]}, {"at": [4, 1]}], moveset="point",
                                           collisions="classic", robot_goals=[[4, 0], [3, 1]]),
-        "classic, mixed movesets": make("\n".join(["TTTTTT"] * 6), [{"at": [0, 3], "moveset": _diagonal(tmp_path)},
+        "classic, mixed movesets": make("\n".join(["TTTTTT"] * 6), [{"at": [0, 3], "moveset": diagonal_moveset(tmp_path)},
                                                                    {"at": [2, 4]}, {"at": [4, 4]}],
                                         moveset="point", collisions="classic",
                                         robot_goals=[[2, 4], [4, 2], [2, 2]]),
