@@ -11,15 +11,19 @@ poses the caller names.
 """
 from __future__ import annotations
 
+from collections import deque
+
 import numpy as np
-from scipy.sparse import csr_matrix
-from scipy.sparse.csgraph import connected_components, dijkstra
 
 from .lru import LRU
 from .moveset import Kind
 from .posegraph import PoseGraph
 
 UNREACHABLE = np.iinfo(np.int32).max // 2  # distance of poses that cannot reach the goal
+# up to so many poses, distances are found by a breadth-first search in Python (about 1 us a pose
+# and move) and scipy's graph routines (0.1 s to load) are not imported: a tiny instance's solve
+# then starts in a quarter of the time; both give the same distances (tests/test_motions.py)
+SMALL_GRAPH = 400
 
 
 class Walk:
@@ -47,8 +51,8 @@ class Walk:
         self._moves: dict[int, list[tuple[int, int, frozenset]]] = {}
         self._dist: LRU[np.ndarray] = LRU(256)
         self._forward: LRU[np.ndarray] = LRU(64)
-        self._reverse: csr_matrix | None = None
-        self._forward_graph: csr_matrix | None = None
+        self._reverse = None  # scipy's sparse graphs of the moves, built on first use (large graphs)
+        self._forward_graph = None
         self._components: np.ndarray | None = None
 
     # ---- moves --------------------------------------------------------------------------------
@@ -115,6 +119,10 @@ class Walk:
             found = np.asarray(sources(), dtype=np.int64)
             if len(found) == 0:
                 return np.full(self.succ.shape[0], UNREACHABLE, dtype=np.int32)
+            if self.succ.shape[0] <= SMALL_GRAPH:
+                return self._breadth_first(found.tolist(), self._lists(reverse=True))
+            from scipy.sparse.csgraph import dijkstra
+
             out = dijkstra(self._reverse_graph(), indices=found, unweighted=True, min_only=True)
             return np.where(np.isfinite(out), out, UNREACHABLE).astype(np.int32)
 
@@ -123,6 +131,10 @@ class Walk:
     def from_pose(self, pose: int) -> np.ndarray:
         """``int32[P]``: fewest steps from ``pose`` to each pose (forward search). Cached."""
         def make() -> np.ndarray:
+            if self.succ.shape[0] <= SMALL_GRAPH:
+                return self._breadth_first([pose], self._lists(reverse=False))
+            from scipy.sparse.csgraph import dijkstra
+
             if self._forward_graph is None:
                 self._forward_graph = self._reverse_graph().T.tocsr()
             out = dijkstra(self._forward_graph, indices=[pose], unweighted=True)[0]
@@ -134,10 +146,47 @@ class Walk:
         """``int[P]``: the strongly connected component of every pose: poses of one component
         reach each other (a quick answer for many reachability questions at once)."""
         if self._components is None:
+            from scipy.sparse.csgraph import connected_components
+
             self._components = connected_components(self._reverse_graph(), directed=True, connection="strong")[1]
         return self._components
 
-    def _reverse_graph(self) -> csr_matrix:
+    def _lists(self, reverse: bool) -> list[list[int]]:
+        """Each pose's successors (``reverse``: predecessors) by a move, waits left out."""
+        key = "_reverse_lists" if reverse else "_forward_lists"
+        out = self.__dict__.get(key)
+        if out is None:
+            out = [[] for _ in range(self.succ.shape[0])]
+            for p, row in enumerate(self.succ.tolist()):
+                for q in row:
+                    if q >= 0 and q != p:
+                        (out[q] if reverse else out[p]).append(p if reverse else q)
+            self.__dict__[key] = out
+        return out
+
+    @staticmethod
+    def _breadth_first(sources: list[int], lists: list[list[int]]) -> np.ndarray:
+        """``int32[P]``: fewest moves from the ``sources`` along ``lists`` (:data:`UNREACHABLE`
+        where none leads)."""
+        dist = [UNREACHABLE] * len(lists)
+        queue = deque()
+        for s in sources:
+            if dist[s] == UNREACHABLE:
+                dist[s] = 0
+                queue.append(s)
+        while queue:
+            p = queue.popleft()
+            d = dist[p] + 1
+            for q in lists[p]:
+                if dist[q] == UNREACHABLE:
+                    dist[q] = d
+                    queue.append(q)
+        return np.asarray(dist, dtype=np.int32)
+
+    def _reverse_graph(self):
+        """The moves as a sparse matrix from the pose moved to to the pose moved from."""
+        from scipy.sparse import csr_matrix
+
         if self._reverse is None:
             p, a = np.nonzero(self.succ >= 0)
             q = self.succ[p, a]

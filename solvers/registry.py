@@ -44,7 +44,7 @@ def plan_mstar(instance: Instance, options=None, run: Run | None = None) -> Resu
     if instance.is_reconfiguration:
         return reconfigure.plan(instance, motion="mstar", load_transfer=o.load_transfer, d_tr=o.d_tr,
                                 epsilon=o.epsilon, run=run, max_steps=o.max_steps, active=o.active)
-    o.loop_only()
+    o.check_instance(instance)
     return mstar.plan(instance, o, run)
 
 
@@ -64,19 +64,18 @@ def plan_lacam(instance: Instance, options=None, run: Run | None = None) -> Resu
     finds a schedule whenever one exists (time and memory permitting) and proves ``infeasible``
     when its space is exhausted. ``objective`` is for path planning; ``improve``, ``max_nodes``
     and ``seed`` for the searches over configurations."""
-    from bille.heuristics import lacam, lacam_states
-    from bille.heuristics.loop import reconfigure
+    from bille.heuristics import lacam
 
     o = options or lacam.Options()
     if not instance.is_reconfiguration:
-        o.loop_only()
+        o.check_instance(instance)
         return lacam.plan(instance, o, run)
+    from bille.heuristics import lacam_states  # (and scipy's graph routines) for an instance that moves tiles
+    from bille.heuristics.loop import reconfigure
     if instance.collisions == "classic":
         raise OptionError(f"lacam: instance '{instance.name}' moves tiles under classic collisions; "
                           "the reconfiguration loop plans under the Bill-E rule only")
-    if o.objective != "makespan":
-        raise OptionError(f"lacam: objective '{o.objective}' is for path planning; a reconfiguration is "
-                          "planned for its makespan")
+    o.check_instance(instance)
     run = run or Run()
     loop = reconfigure.plan(instance, motion="lacam", load_transfer=o.load_transfer, d_tr=o.d_tr,
                             run=run.part(run.budget.share(LOOP_SHARE)), max_steps=o.max_steps, active=o.active,

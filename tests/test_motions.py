@@ -80,3 +80,23 @@ def test_obstacles_block_feet_and_swept_cells():
     assert g.succ[p, g.moveset.index["fwd-right"]] == -1
     assert g.succ[p, g.moveset.index["fwd-left"]] >= 0
     assert g.pose_of((5, 5), (5, 6)) == -1  # a foot on an obstacle is no pose
+
+
+@pytest.mark.parametrize("name", ["crowded-2", "lt-1", "compare-4", "point-4"])
+def test_small_graphs_walk_the_same_distances_without_scipy(name, monkeypatch):
+    # below SMALL_GRAPH poses the distances come from a Python breadth-first search, above from
+    # scipy's: both on every bundled structure tried, to every cell and from many poses
+    from bille.instances import load_instance, walking
+    from bille.instances.bundled import bundled_path
+
+    inst = load_instance(bundled_path(name))
+    graph = inst.world.graphs[0]
+    tiles = np.asarray(inst.start.tiles)
+    for carrying in (False, True):
+        tables = []
+        for small in (10**9, 0):
+            monkeypatch.setattr(walking, "SMALL_GRAPH", small)
+            walk = walking.Walk(graph, tiles, carrying)
+            poses = range(0, walk.succ.shape[0], max(1, walk.succ.shape[0] // 40))
+            tables.append([walk.distances(c) for c in range(tiles.size)] + [walk.from_pose(p) for p in poses])
+        assert all(np.array_equal(a, b) for a, b in zip(*tables))

@@ -35,6 +35,19 @@ def test_light_commands_import_no_solver_library(tmp_path):
         assert not heavy, f"bille {' '.join(argv)} imported {heavy}"
 
 
+def test_a_tiny_solve_without_a_bound_imports_no_solver_library():
+    # a method that uses no LP and no compiled code leaves scipy and numba unloaded on a tiny
+    # instance (its start-up was 4x importing numpy, click, yaml and rich; now under 2x)
+    commands = [["solve", "crowded-2", "-m", "cbs"], ["solve", "crowded-2", "-m", "temporal-astar"],
+                ["solve", "crowded-2", "-m", "lacam", "-O", "improve=0"]]
+    done = subprocess.run([sys.executable, "-c", PROBE, json.dumps(commands)], capture_output=True, text=True)
+    loaded = json.loads(done.stdout.strip().splitlines()[-1])
+    assert done.stdout.count(" in 0.") + done.stdout.count(" in 1.") == 3  # the solves ran and said so
+    for argv, modules in zip(commands, loaded):
+        heavy = sorted(m for m in modules if any(m == h or m.startswith(h + ".") for h in (*HEAVY, "numba")))
+        assert not heavy, f"bille {' '.join(argv)} imported {heavy}"
+
+
 def test_a_method_is_imported_when_it_is_first_used():
     code = ("import sys; from bille.solvers import METHODS; record = METHODS['cpsat']; "
             "before = 'bille.solvers.exact' in sys.modules; names = list(METHODS); plan = record.plan(); "
