@@ -32,18 +32,16 @@ from collections import deque
 from dataclasses import dataclass, field
 
 from bille.instances import Instance
-from bille.instances.options import option
+from bille.instances.options import option, refuse
 from bille.instances.run import Budget, Run
 
 from .joint import NO_WALK, JointProblem, to_result
+from .lacam_space import PoseSpace
 from .loop.loop_options import LoopOptions
-from .pibt import Bille, Classic, next_priorities
-from .refine import Paths, refine_once
-from .scatter import scatter
+from .pibt import next_priorities
 
 OBJECTIVES = ("makespan", "sum-of-loss")
 RESTART = 0.001  # chance per iteration, while improving, to go back to the start configuration
-SCATTER_MARGIN = 10  # steps an SUO path may take beyond the shortest (lacam3's default)
 SCATTER_SHARE = 0.5  # of the time limit, at most, for the SUO paths (lacam3's share)
 REFINE_RATIO = 3  # while improving: time refining per time searching (lacam3 refines in 4 threads)
 Poses = tuple[int, ...]
@@ -73,10 +71,20 @@ class Options(LoopOptions):
     a seed)."""
 
     METHOD = "lacam"
-    objective: str = option("makespan", choices=OBJECTIVES)
-    improve: float = option(1.0, at_least=0)
-    max_nodes: int = option(2_000_000, at_least=1)
-    seed: int = option(0, at_least=0)
+    objective: str = option("makespan", choices=OBJECTIVES,
+                            help="what the improvement lowers: makespan or sum-of-loss (path planning)")
+    improve: float = option(1.0, at_least=0,
+                            help="seconds spent improving the first schedule (0: stop at the first one)")
+    max_nodes: int = option(2_000_000, at_least=1,
+                            help="configurations stored before giving up or stopping the improvement")
+    seed: int = option(0, at_least=0, help="tie-breaking of the generator: results repeat for a seed")
+
+    def check_instance(self, instance) -> None:
+        """The loop's options (:class:`LoopOptions`); ``objective`` is path planning's: an
+        instance that moves tiles is planned for its makespan."""
+        super().check_instance(instance)
+        if instance.is_reconfiguration:
+            refuse(self, ("objective",), "is for path planning; an instance that moves tiles is planned for its makespan")
 
 
 def plan(instance: Instance, options: Options | None = None, run: Run | None = None):
@@ -90,16 +98,21 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
     """
     o = options or Options()
     problem = JointProblem.of(instance, "lacam")
-    status, steps, stats = joint_plan(problem, objective=o.objective, budget=(run or Run()).budget,
-                                      improve=o.improve, max_nodes=o.max_nodes, seed=o.seed)
-    return to_result(instance, "lacam", status, steps, stats=stats)
+    run = run or Run()
+    status, steps, stats = joint_plan(problem, objective=o.objective, budget=run.budget, improve=o.improve,
+                                      max_nodes=o.max_nodes, seed=o.seed, progress=run.events.on_progress)
+    result = to_result(instance, "lacam", status, steps, stats=stats)
+    if result.schedule is not None:
+        run.events.schedule(result.schedule)
+    return result
 
 
 def joint_plan(problem: JointProblem, *, objective: str = "makespan", budget: Budget | None = None,
                improve: float = 0.0, max_nodes: int = 2_000_000, seed: int = 0,
-               pinned: dict[int, frozenset] | None = None) -> tuple[str, list | None, dict]:
+               pinned: dict[int, frozenset] | None = None, progress=None) -> tuple[str, list | None, dict]:
     """LaCAM* on any :class:`JointProblem` within ``budget`` (None: no limit): ``(status, joint
-    actions or None, stats)``.
+    actions or None, stats)``; ``progress`` (a run's progress receiver, or None) hears of each
+    cheaper schedule found.
 
     ``pinned``: robots that wait in the first step while holding the given cells (the
     reconfiguration loop's picks and places, which replace those waits); the search space is
@@ -115,110 +128,30 @@ def joint_plan(problem: JointProblem, *, objective: str = "makespan", budget: Bu
         space.spread(budget.share(SCATTER_SHARE), seed)
         stats["scatter_s"] = round(budget.now() - start, 6)
     status, steps, stats = search(space, rng, budget=budget, improve=improve, max_nodes=max_nodes,
-                                  stats=stats, start=start)
+                                  stats=stats, start=start, progress=progress)
     if status == "exhausted":
         stats["failure"] = NO_WALK
         status = "unsolved"
     return status, steps, stats
 
 
-class PoseSpace:
-    """The configurations of :class:`JointProblem` (one pose per robot) as LaCAM*'s search space:
-    its generator (:mod:`.pibt`), its objective's step cost and admissible estimate."""
-
-    def __init__(self, problem: JointProblem, objective: str, rng: random.Random, pinned: dict) -> None:
-        self.problem, self.pinned = problem, pinned
-        self.m = len(problem.walks)
-        self.makespan = objective == "makespan"
-        self.classic = problem.instance.collisions == "classic"
-        self.refining = False  # no refinement (:meth:`refine`) until the SUO paths are set
-        self.generator = (Classic if self.classic else Bille)(problem, rng)
-        # the SUO paths and their refinement walk on one set of neighbours, so only where every
-        # robot walks alike (one moveset, one load): another robot's moves may not be among them
-        self.alike = len({id(w) for w in problem.walks}) <= 1
-
-    def spread(self, budget: Budget, seed: int) -> None:
-        """Classic collisions: the generator prefers each robot's next cell on its SUO path
-        (:mod:`.scatter`), planned within ``budget``; and the search may
-        refine its schedules (:meth:`refine`)."""
-        problem = self.problem
-        self.goal_poses = [int(w.goal_poses(c)[0]) for w, c in zip(problem.walks, problem.goals)]
-        self.generator.prefer = scatter(self.generator.nbrs, problem.dist_lists, list(problem.start),
-                                        self.goal_poses, margin=SCATTER_MARGIN, budget=budget, seed=seed,
-                                        arrays=problem.dists)
-        self.refining = None
-
-    def refine(self, configs: list[Poses] | None, rng: random.Random, budget: Budget) -> list[Poses] | None:
-        """One neighbourhood of :mod:`.refine` on the best schedule (``configs``, given when it
-        changed since the last call): the improved configurations, or None."""
-        goals = self.goal_poses
-        if configs is not None:
-            paths = []
-            for i, goal in enumerate(goals):
-                end = len(configs) - 1
-                while end > 0 and configs[end - 1][i] == goal:
-                    end -= 1
-                paths.append([c[i] for c in configs[:end + 1]])
-            self.refining = Paths(paths, len(self.generator.nbrs))
-        if not refine_once(self.refining, self.generator.nbrs, self.problem.dist_lists, goals, rng, budget):
-            return None
-        paths = self.refining.paths
-        return [tuple(p[min(t, len(p) - 1)] for p in paths) for t in range(max(map(len, paths)))]
-
-    def actions(self, a: Poses, b: Poses) -> tuple[int, ...]:
-        """The joint action from configuration ``a`` to ``b``."""
-        moves = self.problem.moves
-        return tuple(next(act for act, q, _ in moves(i, p) if q == r) for i, (p, r) in enumerate(zip(a, b)))
-
-    def start(self) -> Poses:
-        return tuple(self.problem.start)
-
-    def unreachable(self) -> list[int]:
-        return self.problem.unreachable()
-
-    def branches(self, config: Poses, forced: tuple, i: int) -> list[int]:
-        """Robot ``i``'s moves that a constraint may add to ``forced`` (the others cannot be
-        completed to a configuration, nor can any constraint that extends them)."""
-        return self.generator.compatible(config, forced, i)
-
-    def generate(self, config: Poses, order: list[int], forced: tuple, first: bool):
-        return self.generator.generate(config, order, forced, self.pinned if first else {})
-
-    def is_goal(self, config: Poses) -> bool:
-        return self.problem.is_goal(config)
-
-    def resting_all(self, config: Poses) -> list[bool]:
-        return [home[p] for home, p in zip(self.problem.home_lists, config)]
-
-    def first_priorities(self, config: Poses) -> list[float]:
-        return [d[p] / 10_000 for d, p in zip(self.problem.dist_lists, config)]
-
-    def h(self, config: Poses) -> int:
-        ds = [d[p] for d, p in zip(self.problem.dist_lists, config)]
-        return max(ds, default=0) if self.makespan else sum(ds)
-
-    def cost(self, a: Poses, b: Poses) -> int:
-        if self.makespan:
-            return 1
-        return sum(1 for home, p, q in zip(self.problem.home_lists, a, b) if not (p == q and home[q]))
-
-
 def search(space, rng: random.Random, *, budget: Budget | None = None, improve: float = 0.0,
            max_nodes: int = 2_000_000, stats: dict | None = None,
-           start: float | None = None) -> tuple[str, list | None, dict]:
+           start: float | None = None, progress=None) -> tuple[str, list | None, dict]:
     """LaCAM* over any search ``space`` (:class:`PoseSpace`, or whole states in
     :mod:`.lacam_states`): ``(status, joint actions or None, stats)`` with status ``optimal``
     (the improvement exhausted the space), ``feasible``, ``timeout``, ``unsolved`` (node cap or
     an unreachable goal; ``stats["failure"]``) or ``exhausted`` (no goal in the whole space:
     the caller says what that proves). ``budget`` None: no limit; ``start``: the budget's time
-    the run began (default: now)."""
-    return _LaCAM(space, rng, budget or Budget(), improve, max_nodes, stats or {}, start).run()
+    the run began (default: now); ``progress``: told each cheaper schedule (``cost``, and as
+    ``best`` where the cost is the makespan)."""
+    return _LaCAM(space, rng, budget or Budget(), improve, max_nodes, stats or {}, start, progress).run()
 
 
 class _LaCAM:
     def __init__(self, space, rng: random.Random, budget: Budget, improve, max_nodes, stats: dict,
-                 start: float | None) -> None:
-        self.space = space
+                 start: float | None, progress=None) -> None:
+        self.space, self.progress = space, progress
         self.m = space.m
         self.budget = budget
         self.start = budget.now() if start is None else start
@@ -362,6 +295,10 @@ class _LaCAM:
                 self.stats["first_s"], self.stats["first_cost"] = elapsed, node.g
             self.best = node
             known.append([elapsed, node.g])
+            if self.progress is not None:
+                makespan = getattr(self.space, "makespan", True)  # whole states: always the makespan
+                self.progress({"lower": None, "best": node.g if makespan else None, "elapsed": elapsed,
+                               "cost": node.g, "nodes": self.stats["nodes"]})
 
     def _rewire(self, root: _Node) -> None:
         """LaCAM*'s Dijkstra update: lower the cost of every node reachable from ``root`` through

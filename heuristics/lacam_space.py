@@ -1,0 +1,101 @@
+"""LaCAM*'s search space on a fixed structure: the configurations of a :class:`JointProblem` (one
+pose per robot), their generator (:mod:`.pibt`), the step cost and admissible estimate of the
+objective, and under classic collisions the SUO paths (:mod:`.scatter`) and their refinement
+(:mod:`.refine`). The search itself is :func:`.lacam.search`."""
+from __future__ import annotations
+
+import random
+
+from bille.instances.run import Budget
+
+from .joint import JointProblem
+from .pibt import Bille, Classic
+from .refine import Paths, refine_once
+from .scatter import scatter
+
+SCATTER_MARGIN = 10  # steps an SUO path may take beyond the shortest (lacam3's default)
+Poses = tuple[int, ...]
+
+
+class PoseSpace:
+    """The configurations of :class:`JointProblem` (one pose per robot) as LaCAM*'s search space:
+    its generator (:mod:`.pibt`), its objective's step cost and admissible estimate."""
+
+    def __init__(self, problem: JointProblem, objective: str, rng: random.Random, pinned: dict) -> None:
+        self.problem, self.pinned = problem, pinned
+        self.m = len(problem.walks)
+        self.makespan = objective == "makespan"
+        self.classic = problem.instance.collisions == "classic"
+        self.refining = False  # no refinement (:meth:`refine`) until the SUO paths are set
+        self.generator = (Classic if self.classic else Bille)(problem, rng)
+        # the SUO paths and their refinement walk on one set of neighbours, so only where every
+        # robot walks alike (one moveset, one load): another robot's moves may not be among them
+        self.alike = len({id(w) for w in problem.walks}) <= 1
+
+    def spread(self, budget: Budget, seed: int) -> None:
+        """Classic collisions: the generator prefers each robot's next cell on its SUO path
+        (:mod:`.scatter`), planned within ``budget``; and the search may
+        refine its schedules (:meth:`refine`)."""
+        problem = self.problem
+        self.goal_poses = [int(w.goal_poses(c)[0]) for w, c in zip(problem.walks, problem.goals)]
+        self.generator.prefer = scatter(self.generator.nbrs, problem.dist_lists, list(problem.start),
+                                        self.goal_poses, margin=SCATTER_MARGIN, budget=budget, seed=seed,
+                                        arrays=problem.dists)
+        self.refining = None
+
+    def refine(self, configs: list[Poses] | None, rng: random.Random, budget: Budget) -> list[Poses] | None:
+        """One neighbourhood of :mod:`.refine` on the best schedule (``configs``, given when it
+        changed since the last call): the improved configurations, or None."""
+        goals = self.goal_poses
+        if configs is not None:
+            paths = []
+            for i, goal in enumerate(goals):
+                end = len(configs) - 1
+                while end > 0 and configs[end - 1][i] == goal:
+                    end -= 1
+                paths.append([c[i] for c in configs[:end + 1]])
+            self.refining = Paths(paths, len(self.generator.nbrs))
+        if not refine_once(self.refining, self.generator.nbrs, self.problem.dist_lists, goals, rng, budget):
+            return None
+        paths = self.refining.paths
+        return [tuple(p[min(t, len(p) - 1)] for p in paths) for t in range(max(map(len, paths)))]
+
+    def actions(self, a: Poses, b: Poses) -> tuple[int, ...]:
+        """The joint action from configuration ``a`` to ``b``."""
+        moves = self.problem.moves
+        return tuple(next(act for act, q, _ in moves(i, p) if q == r) for i, (p, r) in enumerate(zip(a, b)))
+
+    def start(self) -> Poses:
+        return tuple(self.problem.start)
+
+    def unreachable(self) -> list[int]:
+        return self.problem.unreachable()
+
+    def branches(self, config: Poses, forced: tuple, i: int) -> list[int]:
+        """Robot ``i``'s moves that a constraint may add to ``forced`` (the others cannot be
+        completed to a configuration, nor can any constraint that extends them)."""
+        return self.generator.compatible(config, forced, i)
+
+    def generate(self, config: Poses, order: list[int], forced: tuple, first: bool):
+        return self.generator.generate(config, order, forced, self.pinned if first else {})
+
+    def is_goal(self, config: Poses) -> bool:
+        return self.problem.is_goal(config)
+
+    def resting_all(self, config: Poses) -> list[bool]:
+        return [home[p] for home, p in zip(self.problem.home_lists, config)]
+
+    def first_priorities(self, config: Poses) -> list[float]:
+        return [d[p] / 10_000 for d, p in zip(self.problem.dist_lists, config)]
+
+    def h(self, config: Poses) -> int:
+        ds = [d[p] for d, p in zip(self.problem.dist_lists, config)]
+        return max(ds, default=0) if self.makespan else sum(ds)
+
+    def cost(self, a: Poses, b: Poses) -> int:
+        if self.makespan:
+            return 1
+        return sum(1 for home, p, q in zip(self.problem.home_lists, a, b) if not (p == q and home[q]))
+
+
+__all__ = ["PoseSpace", "SCATTER_MARGIN"]
