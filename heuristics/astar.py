@@ -26,8 +26,9 @@ class Options(MethodOptions):
     expansions before giving up with status ``unsolved``."""
 
     METHOD = "astar"
-    epsilon: float = option(1.0, at_least=1)
-    max_expansions: int = option(5_000_000, at_least=1)
+    epsilon: float = option(1.0, at_least=1,
+                            help="weight of the heuristic: plans cost at most epsilon times optimal; 1 is optimal", aliases=("eps",))
+    max_expansions: int = option(5_000_000, at_least=1, help="expansions before giving up (status unsolved)")
 
 
 def plan(instance: Instance, options: Options | None = None, run: Run | None = None):

@@ -44,9 +44,11 @@ class Options(LoopOptions):
     tiles."""
 
     METHOD = "mstar"
-    epsilon: float = option(1.0, at_least=1)
-    od: bool = option(True)
-    max_expansions: int = option(5_000_000, at_least=1)
+    epsilon: float = option(1.0, at_least=1,
+                            help="inflation of the heuristic (1 gives optimal plans)", aliases=("eps",))
+    od: bool = option(True, help="expand coupled robots one at a time (operator decomposition)")
+    max_expansions: int = option(5_000_000, at_least=1,
+                                 help="expansions (vertices and intermediate nodes) before giving up")
 
 
 def plan(instance: Instance, options: Options | None = None, run: Run | None = None):

@@ -46,11 +46,14 @@ class Options(LoopOptions):
     ``max_steps`` defaults to 4 x the robots' summed distances to their goals, at least 100."""
 
     METHOD = "temporal-astar"
-    epsilon: float = option(1.0, at_least=1)
-    horizon: int = option(5, at_least=1)
-    max_shifts: int | None = option(None, at_least=0)
-    shift_priorities: bool = option(True)
-    priorities: list[int] | None = option(None)
+    epsilon: float = option(1.0, at_least=1,
+                            help="weight of the heuristic in each robot's window search", aliases=("eps",))
+    horizon: int = option(5, at_least=1, help="steps each robot plans ahead", aliases=("H",))
+    max_shifts: int | None = option(None, at_least=0,
+                                    help="priority shifts allowed (default: 4 m^2, in the loop 4 m^2 + 4 jobs)")
+    shift_priorities: bool = option(True,
+                                    help="false keeps the priorities fixed (for comparison): a blocked robot ends the run")
+    priorities: list[int] | None = option(None, help="the initial priority order, robot ids (default: in order)")
 
     def check(self) -> None:
         super().check()
@@ -68,7 +71,7 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
 
     o = options or Options()
     if not instance.is_reconfiguration:
-        o.loop_only()
+        o.check_instance(instance)
     return reconfigure.plan(instance, motion="temporal-astar", load_transfer=o.load_transfer, d_tr=o.d_tr,
                             epsilon=o.epsilon, horizon=o.horizon, run=run, max_steps=o.max_steps,
                             max_shifts=o.max_shifts, priorities=o.priorities, active=o.active,

@@ -33,10 +33,12 @@ from .errors import OptionError
 
 
 def option(default: Any, *, at_least: float | None = None, above: float | None = None,
-           choices: tuple | None = None) -> Any:
-    """A field of a :class:`MethodOptions`: its default, and its range (``at_least``, strictly
-    ``above``, or one of ``choices``)."""
-    return dataclasses.field(default=default, metadata={"at_least": at_least, "above": above, "choices": choices})
+           choices: tuple | None = None, help: str = "", aliases: tuple[str, ...] = ()) -> Any:
+    """A field of a :class:`MethodOptions`: its default, its range (``at_least``, strictly
+    ``above``, or one of ``choices``), a line saying what it does (``bille methods METHOD``
+    prints it) and other names it may be given by (``H`` for ``horizon``)."""
+    return dataclasses.field(default=default, metadata={"at_least": at_least, "above": above, "choices": choices,
+                                                        "help": help, "aliases": tuple(aliases)})
 
 
 @dataclasses.dataclass(frozen=True)
@@ -55,20 +57,49 @@ class MethodOptions:
     def check(self) -> None:
         """What is particular to the method (a combination of options); raise OptionError."""
 
-    @classmethod
-    def parse(cls, given: dict[str, Any], also: tuple[str, ...] = ("time_limit",)):
-        """The options from ``given`` (names and values), checked; the others take their defaults.
-        ``also``: names taken elsewhere, listed in the message for an unknown name."""
-        names = [f.name for f in dataclasses.fields(cls)]
-        for name in given:
-            if name not in names:
-                expected = ", ".join([*also, *names])
-                raise OptionError(f"{cls.METHOD}: unknown option '{name}' (expected one of: {expected})")
-        return cls(**given)
+    def check_instance(self, instance) -> None:
+        """Raise OptionError if an option given has no effect on ``instance`` (the reason in the
+        message): a method adds its own, :func:`refuse` helps."""
 
     @classmethod
-    def rows(cls) -> list[tuple[str, str, str]]:
-        """``(name, type, default and range)`` of each option, for ``bille methods``."""
+    def names(cls) -> dict[str, str]:
+        """Every name an option may be given by (its own and its aliases) -> its own name."""
+        out = {}
+        for f in dataclasses.fields(cls):
+            out[f.name] = f.name
+            out.update((alias, f.name) for alias in f.metadata.get("aliases", ()))
+        return out
+
+    @classmethod
+    def gather(cls, given: list[tuple[str, str, Any]]) -> dict[str, Any]:
+        """``(label, name, value)`` triples (``label``: how the user wrote it, e.g. ``-H 3``) -> the
+        options by their own names: an alias becomes the option's name (``-`` reads as ``_``), and
+        one option given twice, by any two names, is an OptionError naming both."""
+        names, out, seen = cls.names(), {}, {}
+        for label, name, value in given:
+            name = name.replace("-", "_")
+            own = names.get(name, name)
+            if own in seen:
+                raise OptionError(f"{cls.METHOD}: option {own} is given twice: {seen[own]} and {label}")
+            seen[own], out[own] = label, value
+        return out
+
+    @classmethod
+    def parse(cls, given: dict[str, Any], also: tuple[str, ...] = ("time_limit",)):
+        """The options from ``given`` (names or aliases and values), checked; the others take
+        their defaults. ``also``: names taken elsewhere, listed in the message for an unknown
+        name."""
+        names = cls.names()
+        for name in given:
+            if name not in names:
+                expected = ", ".join([*also, *(f.name for f in dataclasses.fields(cls))])
+                raise OptionError(f"{cls.METHOD}: unknown option '{name}' (expected one of: {expected})")
+        return cls(**cls.gather([(f"{name}={_show(value)}", name, value) for name, value in given.items()]))
+
+    @classmethod
+    def rows(cls) -> list[tuple[str, str, str, str]]:
+        """``(name, type, default and range, what it does)`` of each option, for ``bille methods``;
+        the help names the option's aliases."""
         hints = typing.get_type_hints(cls)
         own = cls.__dict__.get("__annotations__", {})
         out = []
@@ -76,8 +107,19 @@ class MethodOptions:
             kind = _describe_type(hints[f.name])
             default = "none" if f.default is None else str(f.default).lower() if isinstance(f.default, bool) \
                 else str(f.default)
-            out.append((f.name, kind, default + _describe_range(f.metadata)))
+            aliases = f.metadata.get("aliases", ())
+            help_ = f.metadata.get("help", "") + (f" (also {', '.join(aliases)})" if aliases else "")
+            out.append((f.name, kind, default + _describe_range(f.metadata), help_))
         return out
+
+
+def refuse(options: MethodOptions, names: tuple[str, ...], why: str) -> None:
+    """Raise OptionError if any of ``names`` differs from its default in ``options``; ``why``
+    completes the message, e.g. ``"works on instances that move tiles; lt-1 moves none"``."""
+    defaults = {f.name: f.default for f in dataclasses.fields(options)}
+    given = [n for n in names if getattr(options, n) != defaults[n]]
+    if given:
+        raise OptionError(f"{options.METHOD}: option {', '.join(given)} {why}")
 
 
 def check_value(method: str, name: str, value: Any, hint, meta) -> None:
@@ -162,4 +204,4 @@ def _show(value: Any) -> str:
     return text if len(text) <= 40 else text[:37] + "..."
 
 
-__all__ = ["MethodOptions", "check_value", "option"]
+__all__ = ["MethodOptions", "check_value", "option", "refuse"]

@@ -86,6 +86,7 @@ def solve(instance: Instance | str, method: str = "auto", progress=None, *, boun
         record = METHODS[method]
         limit = record.time_limit if time_limit is _DEFAULT else time_limit
         parsed = check_options(method, {**options, "time_limit": limit})
+        parsed.check_instance(instance)
         for name, tell in (("on_schedule", on_schedule), ("on_bound", on_bound), ("progress", progress)):
             if tell is not None and not callable(tell):
                 raise OptionError(f"{method}: {name} must be a function, got {tell!r}")
@@ -189,10 +190,10 @@ def _raised(classes: dict | None, result: Result) -> dict | None:
     """The class bounds raised by what the method proved: its bound for every schedule, and a
     restricted exact search's bound within its class. None after a proof that no schedule
     exists."""
-    from .classes import RESTRICTIONS, ClassBound, nested
-
     if classes is None or result.status == "infeasible":
         return None
+    from .classes import RESTRICTIONS, ClassBound, nested
+
     out = {key: c if c.empty else ClassBound(key, max(c.lower, result.lower_bound or 0)) for key, c in classes.items()}
     for key, value in {**result.stats.get("class_lower_bounds", {}), **result.stats.get("class_optima", {})}.items():
         if key in out and not out[key].empty:  # proved by an exact search of the class (anytime's)

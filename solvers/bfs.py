@@ -56,13 +56,18 @@ class Options(MethodOptions):
     where the goal states can be listed and no incumbent is given (its pruning works forward)."""
 
     METHOD = "bfs"
-    cells: str = option("all", choices=KINDS)
-    add_cells: list[list[int]] | None = option(None)
-    incumbent: Schedule | None = option(None)
-    max_steps: int | None = option(None, at_least=0)
-    max_states: int | None = option(None, at_least=1)
-    engine: str = option("auto", choices=("auto", "compiled", "python"))
-    direction: str = option("auto", choices=("auto", "forward", "both"))
+    cells: str = option("all", choices=KINDS,
+                        help="the class searched: keep (cells where start and goal differ), no-scaffold (where either has a tile), all")
+    add_cells: list[list[int]] | None = option(None, help="[[x, y], ...]: cells added to the class")
+    incumbent: Schedule | None = option(None, help="a schedule to search below (--incumbent FILE)")
+    max_steps: int | None = option(None, at_least=0,
+                                   help="depth cap (none: until the goal, the time limit or the state cap)")
+    max_states: int | None = option(None, at_least=1,
+                                    help="states stored at most (none: what fits in the memory allowed, BILLE_MEMORY_GIB)")
+    engine: str = option("auto", choices=("auto", "compiled", "python"),
+                         help="compiled, python (the reference twin: every schedule only) or auto (the twin on tiny spaces)")
+    direction: str = option("auto", choices=("auto", "forward", "both"),
+                            help="forward, both (also back from the goal states) or auto (both where they can be listed)")
 
     @property
     def plain(self) -> bool:
@@ -117,7 +122,10 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
                           f"{human(room)} this machine allows (BILLE_MEMORY_GIB sets it)")
     out = search(instance, cells, budget, U=upper, max_states=max_states, max_steps=options.max_steps,
                  events=run.events, tables=tables, direction=direction)
-    return _result(instance, cells, out, upper, incumbent, options, budget)
+    result = _result(instance, cells, out, upper, incumbent, options, budget)
+    if result.schedule is not None:
+        run.events.schedule(result.schedule)
+    return result
 
 
 def _tiny(instance: Instance) -> bool:

@@ -34,7 +34,8 @@ def plan(instance: Instance, options, run: Run | None = None) -> Result:
     """
     max_steps = math.inf if options.max_steps is None else options.max_steps
     max_states = math.inf if options.max_states is None else options.max_states
-    budget = (run or Run()).budget.child()
+    run = run or Run()
+    budget, events = run.budget.child(), run.events
     world = instance.world
     goal_tiles, goal_cells = instance.goal_tiles, instance.goal_cells
     root = instance.start_state
@@ -64,6 +65,7 @@ def plan(instance: Instance, options, run: Run | None = None) -> Result:
                                   time_s=budget.elapsed())
                 if goal_violation(world, s, goal_tiles, goal_cells, depth) is None:
                     schedule = _unwind(instance, parent, s)
+                    events.schedule(schedule)
                     return Result("bfs", "optimal", schedule, lower_bound=depth, stats=stats(),
                                   time_s=budget.elapsed())
             if depth == max_steps:
@@ -87,6 +89,9 @@ def plan(instance: Instance, options, run: Run | None = None) -> Result:
                             nxt.append(new)
             frontier = nxt
             depth += 1
+            events.bound(depth)  # every state within depth - 1 steps was tested: none is a goal
+            events.progress({"lower": depth, "best": None, "elapsed": budget.elapsed(), "depth": depth,
+                             "states": len(parent)})
     except KeyboardInterrupt:  # every level above the one under way was checked: a proved bound
         return Result("bfs", "interrupted", lower_bound=depth, stats=stats("interrupted"),
                       time_s=budget.elapsed())

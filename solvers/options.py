@@ -29,4 +29,14 @@ def check_options(method: str, given: dict[str, Any]) -> MethodOptions:
     return record.options().parse(given)
 
 
-__all__ = ["check_options"]
+def gather_options(method: str, given: list[tuple[str, str, Any]]) -> dict[str, Any]:
+    """``(label, name, value)`` triples as the user wrote them (a command line's flags and
+    ``-O NAME=VALUE``, a ``--methods`` token) -> ``method``'s options by their own names
+    (:meth:`~bille.instances.options.MethodOptions.gather`): aliases resolved, and one option
+    given twice (by a flag and ``-O``, or by two aliases) an :class:`OptionError` naming both."""
+    if method not in METHODS:
+        raise OptionError(f"unknown method '{method}' (expected one of: {', '.join(METHODS)})")
+    return METHODS[method].options().gather(given)
+
+
+__all__ = ["check_options", "gather_options"]

@@ -183,10 +183,74 @@ def test_methods_lists_every_method_and_what_it_proves(cli, capsys):
 def test_option_help_lists_a_methods_options_without_solving(cli, capsys):
     assert cli(["solve", "no-such-instance", "-m", "cbs", "-O", "help"]) == 0
     out = capsys.readouterr().out
-    assert "w           float, default 1.0 (>= 1)" in out and "time_limit  float or none, default 60.0 (> 0 s)" in out
+    assert "w           suboptimality: the sum of costs found is at most w times optimal" in out
+    assert "float, default 1.0 (>= 1)" in out and "float or none, default 60.0 (> 0 s)" in out
     assert cli(["methods", "sat"]) == 0
     assert "solver" in capsys.readouterr().out
     assert cli(["methods", "slove"]) == 2
+
+
+def test_every_option_of_every_method_says_what_it_does(cli, capsys):
+    from bille.solvers import METHODS
+
+    for method in METHODS:
+        assert cli(["methods", method]) == 0
+        lines = capsys.readouterr().out.splitlines()
+        names = [row[0] for row in METHODS[method].options().rows()]
+        for name in names:  # the option's line: its name, then a description of some words
+            line = next(line for line in lines if line.strip().split(" ")[0] == name)
+            assert len(line.split(name, 1)[1].split()) >= 3, (method, line)
+
+
+def test_one_option_given_twice_is_refused_naming_both(rejects, cli, capsys):
+    rejects(["solve", "compare-4", "-m", "temporal-astar", "-H", "3", "-O", "horizon=10"],
+            "temporal-astar: option horizon is given twice: -H/--horizon 3 and -O horizon=10")
+    rejects(["solve", "compare-4", "-m", "temporal-astar", "-O", "H=3", "-O", "horizon=10"],
+            "option horizon is given twice: -O H=3 and -O horizon=10")
+    rejects(["solve", "compare-4", "-m", "cbs", "--time-limit", "3", "-O", "time_limit=4"],
+            "option time_limit is given twice")
+    rejects(["gap", "compare-4", "--methods", "temporal-astar:H=10,horizon=3"],
+            "option horizon is given twice: H=10 and horizon=3")
+
+
+def test_an_alias_is_the_option_itself(cli, capsys):
+    runs = []
+    for argv in (["-O", "H=8"], ["-H", "8"], ["-O", "horizon=8"]):
+        assert cli(["solve", "compare-4", "-m", "temporal-astar", "--json", *argv]) == 0
+        runs.append(json.loads(capsys.readouterr().out))
+    assert runs[0]["stats"]["horizon"] == 8
+    assert runs[0]["schedule"] == runs[1]["schedule"] == runs[2]["schedule"]
+
+
+def test_an_option_without_effect_on_the_instance_is_refused(rejects):
+    rejects(["solve", "compare-4", "-m", "temporal-astar", "-O", "load_transfer=true"],
+            "temporal-astar: option load_transfer works in the reconfiguration loop only, and compare-4 moves no tiles")
+    rejects(["solve", "compare-4", "-m", "lacam", "--load-transfer", "--d-tr", "3"],
+            "lacam: option load_transfer, d_tr works in the reconfiguration loop only")
+    rejects(["solve", "lt-4", "-m", "lacam", "-O", "objective=sum-of-loss"],
+            "lacam: option objective is for path planning")
+
+
+@pytest.mark.parametrize("method", ["cbs", "lacam", "bfs", "temporal-astar"])
+def test_the_log_holds_the_runs_events(cli, capsys, tmp_path, method):
+    log = tmp_path / "run.log"
+    capped = ["-O", "max_steps=3"] if method == "bfs" else []  # the whole search takes minutes here
+    assert cli(["solve", "compare-4", "-m", method, "--json", "--log", log, *capped]) == (1 if capped else 0)
+    result = json.loads(capsys.readouterr().out)
+    events = [json.loads(line) for line in log.read_text().splitlines()]
+    assert any(e["event"] == "progress" for e in events)
+    assert all(e["event"] in ("schedule", "bound", "progress") for e in events)
+    assert [e["t"] for e in events] == sorted(e["t"] for e in events)
+    found = [e["makespan"] for e in events if e["event"] == "schedule"]
+    assert found == [] if result["metrics"] is None else found[-1] == result["metrics"]["makespan"]
+    bounds = [e["lower"] for e in events if e["event"] == "bound"]
+    assert all(b <= (result["lower_bound"] or 0) for b in bounds)
+
+
+def test_a_refused_run_leaves_no_log(rejects, tmp_path):
+    log = tmp_path / "run.log"
+    rejects(["solve", "compare-4", "-m", "temporal-astar", "-O", "load_transfer=true", "--log", log], "load_transfer")
+    assert not log.exists()
 
 
 def test_a_deadlock_says_what_to_try(cli, capsys):
@@ -242,8 +306,8 @@ def test_one_letter_means_one_thing_and_no_design_file_is_cited():
 def test_an_option_in_exponent_notation_is_a_number():
     # YAML reads 1e3 as text: "-O w=1e3" was refused as "not a finite number"
     from bille.tools.solve_commands import _parse_options
-    assert _parse_options(["w=1e3", "epsilon=2", "name=keep", "x=1.5"]) == {"w": 1000.0, "epsilon": 2, "name": "keep",
-                                                                        "x": 1.5}
+    read = {name: value for _, name, value in _parse_options(["w=1e3", "epsilon=2", "name=keep", "x=1.5"])}
+    assert read == {"w": 1000.0, "epsilon": 2, "name": "keep", "x": 1.5}
 
 
 def test_methods_options_as_json(cli, capsys):

@@ -74,7 +74,7 @@ def test_docs_commands_parse(doc, line, monkeypatch):
     """Every ``bille`` line of the README's and the docs' bash blocks names a command and options
     that exist, with values of the right type, and methods and method options (``-O``, ``gap
     --methods``) that exist; a file it names need not exist yet (an earlier line makes it)."""
-    from bille.solvers.options import check_options
+    from bille.solvers.options import check_options, gather_options
     from bille.tools.gap import parse_configs
     from bille.tools.solve_commands import _parse_options
 
@@ -89,7 +89,7 @@ def test_docs_commands_parse(doc, line, monkeypatch):
         pytest.fail(f"{doc}: {line}: {exc.format_message()}")
     params = ctx.params
     if ctx.command.name == "solve" and params["extra"]:
-        check_options(params["method"], _parse_options(params["extra"]))
+        check_options(params["method"], gather_options(params["method"], _parse_options(params["extra"])))
     if ctx.command.name == "gap":
         parse_configs(params["methods"])
 

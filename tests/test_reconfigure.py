@@ -416,7 +416,7 @@ def test_active_names_robots_of_the_instance():
     for active in ([2], [], [-1], [True], "0,1"):
         with pytest.raises(OptionError, match="active must name"):
             plan(inst, active=active)
-    with pytest.raises(OptionError, match="active is for instances that move tiles"):
+    with pytest.raises(OptionError, match="option active works in the reconfiguration loop only"):
         solve(bundled("compare-2"), "temporal-astar", active=[0])
 
 

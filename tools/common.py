@@ -133,6 +133,60 @@ class LiveLine:
         return text + ("" if self.horizon is None else f"; {self.horizon}")
 
 
+class EventLog:
+    """``bille solve --log FILE``: every event of the run (``solve()``'s ``on_schedule``,
+    ``on_bound`` and ``progress``) as one JSON line, with ``t``, the seconds since the log was
+    opened, and ``event``: ``schedule`` (its ``makespan``), ``bound`` (a makespan ``lower`` bound
+    proved for every schedule) or ``progress`` (what the method tells: ``lower`` and ``best``
+    where it knows them, and its own counters such as ``depth``, ``states``, ``steps``,
+    ``expanded``, ``cost``). Each line is flushed as it is written, so the file can be followed
+    while the run goes on. Without a path it writes nothing; used as a context manager."""
+
+    def __init__(self, path: str | None, also=None) -> None:
+        self.path, self.also, self.file, self.lines = path, also, None, 0
+
+    def __enter__(self) -> "EventLog":
+        import time
+
+        if self.path:
+            self.file = open(self.path, "w", encoding="utf-8")
+        self.began = time.monotonic()
+        return self
+
+    def __exit__(self, kind, *exc) -> None:
+        if self.file is not None:
+            self.file.close()
+            self.file = None
+            if kind is not None and self.lines == 0:  # refused before it ran: no empty file left behind
+                os.remove(self.path)
+
+    def _write(self, event: str, data: dict) -> None:
+        import time
+
+        if self.file is not None:
+            line = {"t": round(time.monotonic() - self.began, 6), "event": event, **data}
+            self.file.write(json.dumps(line, default=_plain) + "\n")
+            self.file.flush()
+            self.lines += 1
+
+    def schedule(self, found) -> None:
+        makespan = getattr(found, "makespan", None)
+        self._write("schedule", {"makespan": int(found.length if makespan is None else makespan)})
+
+    def bound(self, value: int) -> None:
+        self._write("bound", {"lower": int(value)})
+
+    def progress(self, info: dict) -> None:
+        self._write("progress", dict(info))
+        if self.also is not None:
+            self.also(info)
+
+
+def _plain(value):
+    """numpy numbers and anything else JSON does not know, as a JSON value."""
+    return value.item() if hasattr(value, "item") else str(value)
+
+
 def writable(*paths) -> None:
     """Fail before any work when an output file cannot be created (a missing folder, a folder
     in its place, no permission)."""

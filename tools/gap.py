@@ -37,7 +37,7 @@ import yaml
 
 from bille.instances import BilleError, Instance, OptionError
 from bille.solvers import METHODS, solve, validate
-from bille.solvers.options import check_options
+from bille.solvers.options import check_options, gather_options
 
 from .common import shown_status, status_key
 from .tables import text_table
@@ -45,7 +45,6 @@ from .tables import text_table
 FIELDS = ["instance", "method", "status", "makespan", "own_lower_bound", "lower_bound", "best", "tiles_traveled",
           "time_s", "gap_percent", "certified_gap_percent", "classes", "class", "class_lower_bound",
           "class_gap_percent", "note"]
-ALIASES = {"H": "horizon", "d-tr": "d_tr", "eps": "epsilon"}
 SHOWN_STATUS = {"unsolved": "gave up", "timeout": "out of time"}
 
 
@@ -56,6 +55,7 @@ class Config:
     label: str
     method: str
     options: dict = field(default_factory=dict)
+    given: list = field(default_factory=list)  # (token, name, value) as written, before aliases are resolved
 
 
 def parse_configs(texts: str | Iterable[str]) -> list[Config]:
@@ -73,6 +73,7 @@ def parse_configs(texts: str | Iterable[str]) -> list[Config]:
     if twice:
         raise OptionError(f"method configuration {twice[0]!r} is named twice")
     for c in configs:  # a wrong option is bad input, found before anything runs
+        c.options = gather_options(c.method, c.given)
         check_options(c.method, c.options)
     return configs
 
@@ -104,7 +105,7 @@ def _add_option(config: Config, token: str) -> None:
         raise OptionError(f"expected OPTION=VALUE after '{config.method}:', got {token!r}")
     name = name.strip()
     try:
-        config.options[ALIASES.get(name, name).replace("-", "_")] = yaml.safe_load(value)
+        config.given.append((token.strip(), name, yaml.safe_load(value)))
     except yaml.YAMLError:
         raise OptionError(f"cannot read the value of {token!r}") from None
     config.label += (":" if config.label == config.method else ",") + token.strip()

@@ -9,20 +9,22 @@ from bille.solvers import METHODS
 from .common import EXIT_OK
 
 
-def options_of(method: str) -> list[tuple[str, str, str]]:
-    """``(name, type, default and range)`` of each option of ``method``: ``time_limit`` first,
-    then its options record's fields."""
+def options_of(method: str) -> list[tuple[str, str, str, str]]:
+    """``(name, type, default and range, what it does)`` of each option of ``method``:
+    ``time_limit`` first, then its options record's fields."""
     record = METHODS[method]
     limit = "none" if record.time_limit is None else record.time_limit
     kind = "float" if record.limit_required else "float or none"
-    return [("time_limit", kind, f"{limit} (> 0 s)"), *record.options().rows()]
+    return [("time_limit", kind, f"{limit} (> 0 s)", "seconds for the whole call, the lower bound included"),
+            *record.options().rows()]
 
 
 def described(method: str) -> dict:
     """The same as :func:`describe`, as one JSON object."""
     record = METHODS[method]
     return {"method": method, "plans": record.plans, "proves": record.proves, "classic": record.classic,
-            "options": [{"name": n, "type": kind, "default": default} for n, kind, default in options_of(method)]}
+            "options": [{"name": n, "type": kind, "default": default, "help": help_}
+                        for n, kind, default, help_ in options_of(method)]}
 
 
 def describe(method: str) -> list[str]:
@@ -30,9 +32,10 @@ def describe(method: str) -> list[str]:
     lines = [f"{method}: {record.plans}", f"  proves: {record.proves}",
              f"  collisions: {'classic and Bill-E' if record.classic else 'Bill-E'}"]
     rows = options_of(method)
-    width = max(len(n) for n, _, _ in rows)
+    width = max(len(n) for n, *_ in rows)
     lines.append("  options (-O NAME=VALUE):")
-    lines += [f"    {n.ljust(width)}  {kind}, default {default}" for n, kind, default in rows]
+    for n, kind, default, help_ in rows:
+        lines += [f"    {n.ljust(width)}  {help_}", f"    {' ' * width}    {kind}, default {default}"]
     return lines
 
 

@@ -7,10 +7,10 @@ import click
 import yaml
 
 from bille.solvers import METHODS, save_schedule, solve
-from bille.solvers.options import check_options
+from bille.solvers.options import check_options, gather_options
 
-from .common import (EXIT_INTERRUPTED, EXIT_NO, EXIT_OK, LiveLine, exit_code, instance_arg, label_of, print_json,
-                     record_traces, schedule_arg, summary_line, trace_of, writable)
+from .common import (EXIT_INTERRUPTED, EXIT_NO, EXIT_OK, EventLog, LiveLine, exit_code, instance_arg, label_of,
+                     print_json, record_traces, schedule_arg, summary_line, trace_of, writable)
 
 
 @click.command("solve")
@@ -37,8 +37,10 @@ from .common import (EXIT_INTERRUPTED, EXIT_NO, EXIT_OK, LiveLine, exit_code, in
 @click.option("--rerun", "rrd", type=click.Path(dir_okay=False), metavar="OUT.rrd",
               help="Write a rerun recording of the schedule found.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object instead of text.")
+@click.option("--log", "log_path", type=click.Path(dir_okay=False), metavar="FILE",
+              help="Write the run's events (schedules found, bounds proved, progress) here, one JSON line each.")
 def solve_(instance: str, method: str, epsilon, horizon, time_limit, threads, load_transfer, d_tr, bound, extra,
-           incumbent, output, rrd, as_json) -> int:
+           incumbent, output, rrd, as_json, log_path) -> int:
     """Solve INSTANCE with METHOD; print the status and metrics (exit 1 if no schedule).
 
     On an instance that moves tiles, temporal-astar and mstar run the reconfiguration loop: the
@@ -60,17 +62,20 @@ def solve_(instance: str, method: str, epsilon, horizon, time_limit, threads, lo
         for line in describe(method):
             click.echo(line)
         return EXIT_OK
-    writable(output, rrd)
-    given = dict(epsilon=epsilon, horizon=horizon, time_limit=time_limit, threads=threads,
-                 load_transfer=load_transfer, d_tr=d_tr)
-    options = {k: v for k, v in given.items() if v is not None}
-    options.update(_parse_options(extra))
+    writable(output, rrd, log_path)
+    flags = (("--epsilon", "epsilon", epsilon), ("-H/--horizon", "horizon", horizon),
+             ("--time-limit", "time_limit", time_limit), ("--threads", "threads", threads),
+             ("--load-transfer", "load_transfer", load_transfer), ("--d-tr", "d_tr", d_tr))
+    given = [(f"{flag} {_shown(value)}" if value is not True else flag, name, value) for flag, name, value in flags
+             if value is not None]
+    options = gather_options(method, given + _parse_options(extra))
     check_options(method, options)  # before the instance is read, and -O never reaches solve()'s own arguments
     inst = instance_arg(instance)
     if incumbent is not None:
         options["incumbent"] = schedule_arg(incumbent)
-    with LiveLine(method, not as_json) as line:
-        result = solve(inst, method, progress=line, bound=bound, **options)
+    with LiveLine(method, not as_json) as line, EventLog(log_path, also=line) as log:
+        result = solve(inst, method, progress=log.progress, on_schedule=log.schedule, on_bound=log.bound,
+                       bound=bound, **options)
     if output and result.schedule is not None:
         save_schedule(result.schedule, output)
     elif output and os.path.exists(output):  # never a stale file taken for this run's answer
@@ -136,17 +141,22 @@ def plan_sequence(instance: str, as_json: bool) -> int:
     return EXIT_OK
 
 
-def _parse_options(items) -> dict:
-    out = {}
+def _parse_options(items) -> list[tuple[str, str, object]]:
+    """``-O NAME=VALUE`` items -> ``(label, name, value)`` triples, values read as YAML."""
+    out = []
     for item in items:
         name, sep, value = item.partition("=")
         if not sep or not name:
             raise click.BadParameter(f"expected NAME=VALUE, got {item!r}", param_hint="-O/--option")
         try:
-            out[name.replace("-", "_")] = _number(yaml.safe_load(value))
+            out.append((f"-O {item}", name, _number(yaml.safe_load(value))))
         except yaml.YAMLError:
             raise click.BadParameter(f"cannot read the value of {item!r}", param_hint="-O/--option") from None
     return out
+
+
+def _shown(value) -> str:
+    return str(value).lower() if isinstance(value, bool) else str(value)
 
 
 def _number(value):

@@ -93,16 +93,22 @@ class Options(MethodOptions):
     be undone). ``max_nodes``: constraint-tree nodes expanded before giving up."""
 
     METHOD = "cbs"
-    objective: str = option("sum-of-costs", choices=OBJECTIVES)
-    w: float = option(1.0, at_least=1)
-    heuristic: str = option("wdg", choices=HEURISTICS)
-    prioritize: bool = option(True)
-    bypass: bool = option(True)
-    target: bool = option(True)
-    rectangle: bool = option(True)
-    corridor: bool = option(True)
-    focal: str = option("conflicts", choices=FOCALS)
-    max_nodes: int = option(1_000_000, at_least=1)
+    objective: str = option("sum-of-costs", choices=OBJECTIVES,
+                            help="sum-of-costs (arrivals for good, added up) or makespan (the latest arrival)")
+    w: float = option(1.0, at_least=1,
+                      help="suboptimality: the sum of costs found is at most w times optimal; 1 is optimal")
+    heuristic: str = option("wdg", choices=HEURISTICS,
+                            help="high-level heuristic: wdg (weighted dependency graph), cg (cardinal conflicts) or none")
+    prioritize: bool = option(True, help="resolve cardinal conflicts first, then semi-cardinal, then the rest")
+    bypass: bool = option(True, help="adopt a child's path of equal cost and fewer conflicts instead of branching")
+    target: bool = option(True, help="target reasoning: a robot resting at its goal is split on 'arrives after t'")
+    rectangle: bool = option(True,
+                             help="rectangle reasoning: one split for a rectangle of conflicts (classic, one-cell moves)")
+    corridor: bool = option(True,
+                            help="corridor reasoning: one split for robots meeting in a corridor (classic, reversible moves)")
+    focal: str = option("conflicts", choices=FOCALS,
+                        help="with w > 1, which node within the bound is expanded: conflicts (fewest) or ees (EECBS)")
+    max_nodes: int = option(1_000_000, at_least=1, help="constraint-tree nodes expanded before giving up")
 
     def check(self) -> None:
         if self.focal != "conflicts" and self.w == 1:
@@ -126,7 +132,8 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
     require_path_planning(instance, "cbs")
     _check_movesets(instance)
     check_tables(instance, "cbs")
-    budget = (run or Run()).budget
+    run = run or Run()
+    budget = run.budget
     problem = JointProblem.of(instance, "cbs")
     agents = agents_of(problem)
     closed = closed_world(instance)
@@ -136,8 +143,12 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
 
     settings = Settings(objective, heuristic, o.prioritize, o.bypass, o.target, o.rectangle,
                         o.corridor and _reversible(instance), w, focal, max_nodes)
+    def told(lower: int, expanded: int) -> None:
+        run.events.progress({"lower": None, "best": None, "elapsed": budget.elapsed(),
+                             "cost_lower": lower, "objective": objective, "expanded": expanded})
+
     tree = Tree(agents, instance.collisions == "classic", settings, budget.expired, stats,
-                instance.width if _grid_steps(instance) else None)
+                instance.width if _grid_steps(instance) else None, told)
     try:
         unreachable = problem.unreachable()
         if unreachable:
@@ -158,7 +169,9 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
         return Result("cbs", "interrupted", stats=stats)
     if found is None:
         return _no_schedule(instance, closed, stats, "no schedule keeps every constraint")
-    return _result(instance, agents, found, tree, closed, stats)
+    result = _result(instance, agents, found, tree, closed, stats)
+    run.events.schedule(result.schedule)
+    return result
 
 
 def _no_schedule(instance: Instance, closed: bool, stats: dict, why: str) -> Result:

@@ -90,7 +90,7 @@ class Tree:
     grid's, where rectangle reasoning applies (point robots moving one cell at a time)."""
 
     def __init__(self, agents: list[Agent], classic: bool, settings: Settings, poll, stats: dict,
-                 width: int | None = None) -> None:
+                 width: int | None = None, told=None) -> None:
         self.agents, self.classic, self.settings = agents, classic, settings
         self.width = width if classic and settings.rectangle else None
         self.corridors = Corridors(agents) if classic and settings.corridor else None
@@ -100,6 +100,7 @@ class Tree:
         self._mdds: dict[tuple, MDD] = {}
         self._pairs: dict[tuple, int | None] = {}
         self.lower = 0
+        self.told = told  # told(lower, expanded) each time the proved bound rises (the top-level search)
 
     # ---- paths ------------------------------------------------------------------------------
 
@@ -295,7 +296,10 @@ class Tree:
             low = lists.lower()
             if low is None:
                 return None
-            self.lower = max(self.lower, low)
+            if low > self.lower:
+                self.lower = low
+                if self.told is not None:
+                    self.told(low, expanded)
             node = lists.select(self.lower)
             if self.poll is not None and self.poll():
                 raise OutOfBudget

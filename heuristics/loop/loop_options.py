@@ -4,8 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from bille.instances import OptionError
-from bille.instances.options import MethodOptions, option
+from bille.instances.options import MethodOptions, option, refuse
 
 
 @dataclass(frozen=True)
@@ -15,18 +14,23 @@ class LoopOptions(MethodOptions):
     times the summed Manhattan carries plus ``W + H`` per job, at least 200); ``active``: the
     robots that take jobs (default: all; the others only keep out of the way). For path
     planning ``max_steps`` is Temporal A*'s step bound, the others are not used, and ``active``
-    is refused (:meth:`loop_only`)."""
+    is refused (:meth:`check_instance`)."""
 
-    load_transfer: bool = option(False)
-    d_tr: int = option(5, at_least=0)
-    max_steps: int | None = option(None, at_least=0)
-    active: list[int] | None = option(None)
+    load_transfer: bool = option(False,
+                                 help="robots hand loads over to one another (paper, equations 1-3); instances that move tiles")
+    d_tr: int = option(5, at_least=0,
+                       help="Manhattan distance within which two robots consider a hand-over (with load_transfer)")
+    max_steps: int | None = option(None, at_least=0,
+                                   help="the loop's step bound (default: 10x the summed carries plus W+H per job, at least 200)")
+    active: list[int] | None = option(None,
+                                      help="the robots that take jobs (default: all; the others keep out of the way); instances that move tiles")
 
-    def loop_only(self) -> None:
-        """Raise OptionError if ``active`` is given for path planning (it names robots that take
-        jobs: there are none)."""
-        if self.active is not None:
-            raise OptionError(f"{self.METHOD}: active is for instances that move tiles (the reconfiguration loop)")
+    def check_instance(self, instance) -> None:
+        """``load_transfer``, ``d_tr`` and ``active`` are the reconfiguration loop's: refused on
+        an instance that moves no tiles."""
+        if not instance.is_reconfiguration:
+            refuse(self, ("load_transfer", "d_tr", "active"),
+                   f"works in the reconfiguration loop only, and {instance.name or 'the instance'} moves no tiles")
 
 
 __all__ = ["LoopOptions"]

@@ -65,6 +65,8 @@ from .sequence import NoSequence, sequence_of
 from .transfer import LoadTransfer
 
 RESTORED = ("circle_shifts", "relays", "swaps")  # counts that a backtrack sets back
+PROGRESS_STEPS = 16  # the loop tells its progress every so many steps
+
 WALKING = ("horizon", "epsilon", "steps", "priority_shifts", "replans", "expanded", "plan_ms_mean",
            "plan_ms_max")  # the counts of path planning (no jobs)
 
@@ -88,7 +90,8 @@ def plan(instance: Instance, *, motion: str | Motion = "temporal-astar", load_tr
     ``shift_priorities``: False keeps ``Q`` fixed (path planning only, for comparison).
     """
     name = motion if isinstance(motion, str) else motion.name
-    budget = (run or Run()).budget
+    run = run or Run()
+    budget = run.budget
     try:
         loop = Loop(instance, motion=motion, load_transfer=load_transfer, d_tr=d_tr, epsilon=epsilon,
                     horizon=horizon, budget=budget, max_steps=max_steps, max_shifts=max_shifts,
@@ -96,7 +99,11 @@ def plan(instance: Instance, *, motion: str | Motion = "temporal-astar", load_tr
     except NoSequence as exc:  # the loop gives up before its first step
         status = "timeout" if budget.expired() else "unsolved"
         return to_result(instance, method or name, status, None, stats={"failure": str(exc)})
-    return loop.run(method or name)
+    loop.progress = run.events.on_progress
+    result = loop.run(method or name)
+    if result.schedule is not None:
+        run.events.schedule(result.schedule)
+    return result
 
 
 def _active(active, m: int, name: str) -> list[int]:
@@ -134,6 +141,7 @@ class Loop:
         active = _active(active, m, name)
         self.instance = instance
         self.budget = budget or Budget()
+        self.progress = None  # the run's progress receiver: told the steps planned every PROGRESS_STEPS
         self.path_planning = not instance.is_reconfiguration  # no jobs: the paper's rules when stuck
         if self.path_planning:
             check_tables(instance, name)
@@ -223,8 +231,12 @@ class Loop:
             if unreachable:
                 stats["unreachable"] = unreachable
                 return stop("unreachable")
+        told = -1
         while not self.done():
             s = self.s
+            if self.progress is not None and len(s.steps) // PROGRESS_STEPS != told:
+                told = len(s.steps) // PROGRESS_STEPS
+                self.progress({"lower": None, "best": None, "elapsed": self.budget.elapsed(), "steps": len(s.steps)})
             if len(s.steps) >= self.max_steps:
                 return stop("step bound")
             if self.budget.expired():

@@ -76,16 +76,23 @@ class ModelOptions(MethodOptions):
     kind of proofs; both others imply it. ``incumbent``: a schedule to start from (``bille solve --incumbent
     FILE``); must be valid."""
 
-    max_makespan: int | None = option(None, at_least=1)
-    connectivity: str = option("eager", choices=CONNECTIVITY)
-    minimize_travel: bool = option(True)
-    prune: bool = option(True)
-    prune_tiles: bool = option(True)
-    single_carry: bool = option(False)
-    keep_structure: bool = option(False)
-    no_scaffold: bool = option(False)
-    incumbent: Schedule | None = option(None)
-    travel_time: float | None = option(None, at_least=0)
+    max_makespan: int | None = option(None, at_least=1,
+                                      help="horizon cap (default: the incumbent's makespan, or max(2 LB, LB + 24))")
+    connectivity: str = option("eager", choices=CONNECTIVITY,
+                               help="how the structure is kept connected: eager (reachability layers), lazy or cuts")
+    minimize_travel: bool = option(True, help="then minimize tiles traveled at the optimal makespan")
+    prune: bool = option(True, help="reachability and candidate-cell pruning (switch off to measure it)")
+    prune_tiles: bool = option(True, help="reachability in time with the tiles, part of prune")
+    single_carry: bool = option(False,
+                                help="only schedules that carry each tile once, start-only cell to goal-only cell (a class)")
+    keep_structure: bool = option(False,
+                                  help="only schedules that pick and place where start and goal differ (a class)")
+    no_scaffold: bool = option(False,
+                               help="only schedules that never set a tile where neither start nor goal has one (a class)")
+    incumbent: Schedule | None = option(None,
+                                        help="a valid schedule to start from (--incumbent FILE): caps the horizon")
+    travel_time: float | None = option(None, at_least=0,
+                                       help="seconds for minimizing tiles traveled (default: half the makespan search, at least 1)")
 
     def model(self) -> Options:
         return Options(prune_reach=self.prune, prune_cells=self.prune, prune_tiles=self.prune and self.prune_tiles,
@@ -109,10 +116,12 @@ class CpsatOptions(ModelOptions):
     ``T - 1`` is enough), and those of :class:`ModelOptions`."""
 
     METHOD = "cpsat"
-    threads: int = option(1, at_least=1)
-    seed: int = option(0, at_least=0)
-    presolve: bool = option(False)
-    first_horizon: int | None = option(None, at_least=1)
+    threads: int = option(1, at_least=1, help="CP-SAT workers (1 with a fixed seed is repeatable)")
+    seed: int = option(0, at_least=0, help="CP-SAT's random seed")
+    presolve: bool = option(False,
+                            help="CP-SAT's presolve for the makespan search (off: it costs more than it saves here)")
+    first_horizon: int | None = option(None, at_least=1,
+                                       help="a guess of the optimum: search down from it while schedules are found, up while none is")
 
 
 @dataclass(frozen=True)
@@ -124,8 +133,8 @@ class SatOptions(ModelOptions):
     outweighs keeping learned clauses across horizons in a larger model."""
 
     METHOD = "sat"
-    solver: str = option("glucose42", choices=SAT_SOLVERS)
-    chunk: int = option(1, at_least=1)
+    solver: str = option("glucose42", choices=SAT_SOLVERS, help="the python-sat solver")
+    chunk: int = option(1, at_least=1, help="horizons one model covers before it is rebuilt larger")
 
 
 def plan_cpsat(instance: Instance, options: CpsatOptions | None = None, run: Run | None = None, *,
