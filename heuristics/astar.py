@@ -27,7 +27,8 @@ class Options(MethodOptions):
 
     METHOD = "astar"
     epsilon: float = option(1.0, at_least=1,
-                            help="weight of the heuristic: plans cost at most epsilon times optimal; 1 is optimal", aliases=("eps",))
+                            help="weight of the heuristic: plans cost at most epsilon times optimal; 1 is "
+                                 "optimal", aliases=("eps",))
     max_expansions: int = option(5_000_000, at_least=1, help="expansions before giving up (status unsolved)")
 
 

@@ -84,7 +84,8 @@ class Options(LoopOptions):
         instance that moves tiles is planned for its makespan."""
         super().check_instance(instance)
         if instance.is_reconfiguration:
-            refuse(self, ("objective",), "is for path planning; an instance that moves tiles is planned for its makespan")
+            refuse(self, ("objective",),
+                   "is for path planning; an instance that moves tiles is planned for its makespan")
 
 
 def plan(instance: Instance, options: Options | None = None, run: Run | None = None):

@@ -52,7 +52,8 @@ class Options(LoopOptions):
     max_shifts: int | None = option(None, at_least=0,
                                     help="priority shifts allowed (default: 4 m^2, in the loop 4 m^2 + 4 jobs)")
     shift_priorities: bool = option(True,
-                                    help="false keeps the priorities fixed (for comparison): a blocked robot ends the run")
+                                    help="false keeps the priorities fixed (for comparison): a blocked robot ends the "
+                                         "run")
     priorities: list[int] | None = option(None, help="the initial priority order, robot ids (default: in order)")
 
     def check(self) -> None:

@@ -51,23 +51,28 @@ class Options(MethodOptions):
     ``BILLE_MEMORY_GIB``). ``engine``: ``compiled``, ``python`` for the reference twin (every
     schedule only, no incumbent), or ``auto``: the twin where it searches every schedule of a
     joint state space estimated at most :data:`PYTHON_SMALL` (:func:`.auto.joint_states`; loading
-    the compiled code takes about 0.4 s, more than the twin needs there), compiled otherwise. ``direction``: ``forward`` from the start, ``both``
-    from the start and back from the goal states (:mod:`.joint.bidirectional`), ``auto`` both
-    where the goal states can be listed and no incumbent is given (its pruning works forward)."""
+    the compiled code takes about 0.4 s, more than the twin needs there), compiled otherwise.
+    ``direction``: ``forward`` from the start, ``both`` from the start and back from the goal
+    states (:mod:`.joint.bidirectional`), ``auto`` both where the goal states can be listed and no
+    incumbent is given (its pruning works forward)."""
 
     METHOD = "bfs"
     cells: str = option("all", choices=KINDS,
-                        help="the class searched: keep (cells where start and goal differ), no-scaffold (where either has a tile), all")
+                        help="the class searched: keep (cells where start and goal differ), no-scaffold (where either "
+                             "has a tile), all")
     add_cells: list[list[int]] | None = option(None, help="[[x, y], ...]: cells added to the class")
     incumbent: Schedule | None = option(None, help="a schedule to search below (--incumbent FILE)")
     max_steps: int | None = option(None, at_least=0,
                                    help="depth cap (none: until the goal, the time limit or the state cap)")
     max_states: int | None = option(None, at_least=1,
-                                    help="states stored at most (none: what fits in the memory allowed, BILLE_MEMORY_GIB)")
+                                    help="states stored at most (none: what fits in the memory allowed, "
+                                         "BILLE_MEMORY_GIB)")
     engine: str = option("auto", choices=("auto", "compiled", "python"),
-                         help="compiled, python (the reference twin: every schedule only) or auto (the twin on tiny spaces)")
+                         help="compiled, python (the reference twin: every schedule only) or auto (the twin on tiny "
+                              "spaces)")
     direction: str = option("auto", choices=("auto", "forward", "both"),
-                            help="forward, both (also back from the goal states) or auto (both where they can be listed)")
+                            help="forward, both (also back from the goal states) or auto (both where they can be "
+                                 "listed)")
 
     @property
     def plain(self) -> bool:

@@ -180,3 +180,45 @@ def test_bench_mapf_runs_a_peer_named_by_its_path(capsys, tmp_path):
     code, out, err = run(capsys, "bench", "mapf", "--names", "room-32-32-4", "--agents", "3",
                          "--against", "pypibt", str(tmp_path))
     assert code == 2 and out == "" and "not pypibt's repository folder" in err and "Traceback" not in err
+
+
+FAKE_CBSH2 = """#!{python}
+# a stand-in for CBSH2-RTC: its command line and its CSV, the optimum taken from bille's cbs (+ offset)
+import sys
+from bille.instances.generators.movingai import from_movingai
+from bille.solvers import solve
+args = dict(zip(sys.argv[1::2], sys.argv[2::2]))
+result = solve(from_movingai(args["-m"], args["-a"], agents=int(args["-k"])), "cbs")
+cost = result.stats["sum_of_costs"] + {offset}
+open(args["-o"], "w").write("runtime,#high-level expanded,solution cost,min f value,preprocessing runtime,solver name\\n"
+                            f"0.25,3,{{cost}},{{cost}},0.25,WDG+R+C+T+BP with AStar\\n")
+"""
+
+
+@pytest.mark.parametrize("offset", [0, 1])
+def test_bench_peers_sets_bille_beside_an_optimal_peer(capsys, tmp_path, offset):
+    import sys
+
+    fake = tmp_path / "cbs"
+    fake.write_text(FAKE_CBSH2.format(python=sys.executable, offset=offset))
+    fake.chmod(0o755)
+    code, out, err = run(capsys, "bench", "peers", "--cbsh2-rtc", str(fake), "--optimal-rows",
+                         "room-32-32-4:2,3", "--time-limit", "10")
+    assert code == 0, err
+    assert "room-32-32-4 2 agents: bille" in err and "cbsh2-rtc [s]" in out
+    assert "geometric mean time ratio" in out and "over 2 rows both solved" in out
+    assert ("DIFFERENT COST" in out) == (offset == 1)  # a peer's optimum that differs from bille's is flagged
+
+
+def test_bench_peers_refuses_what_it_cannot_run(capsys, tmp_path):
+    code, out, err = run(capsys, "bench", "peers")
+    assert code == 2 and "name at least one peer's program" in err and out == ""
+    script = tmp_path / "cbs"
+    script.write_text("not a program")
+    code, out, err = run(capsys, "bench", "peers", "--cbsh2-rtc", str(script))
+    assert code == 2 and "not an executable program" in err
+    script.chmod(0o755)
+    code, out, err = run(capsys, "bench", "peers", "--cbsh2-rtc", str(script), "--optimal-rows", "nowhere:3")
+    assert code == 2 and "nowhere: no NAME.map" in err
+    code, out, err = run(capsys, "bench", "peers", "--cbsh2-rtc", str(script), "--optimal-rows", "room-32-32-4:x")
+    assert code == 2 and "must be whole numbers" in err

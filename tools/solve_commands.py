@@ -25,7 +25,8 @@ from .common import (EXIT_INTERRUPTED, EXIT_NO, EXIT_OK, EventLog, LiveLine, exi
 @click.option("--threads", type=click.IntRange(min=1), help="CP-SAT workers (cpsat; default 1: repeatable results).")
 @click.option("--load-transfer", is_flag=True, default=None,
               help="Reconfiguration (temporal-astar, mstar, lacam): robots exchange loads (paper, equations 1-3).")
-@click.option("--d-tr", type=click.IntRange(min=0), help="Manhattan distance within which robots consider a load transfer.")
+@click.option("--d-tr", type=click.IntRange(min=0),
+              help="Manhattan distance within which robots consider a load transfer.")
 @click.option("--bound", is_flag=True,
               help="Also compute the static makespan lower bound where the method does not use it (the heuristics).")
 @click.option("-O", "--option", "extra", multiple=True, metavar="NAME=VALUE",

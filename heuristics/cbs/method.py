@@ -98,14 +98,17 @@ class Options(MethodOptions):
     w: float = option(1.0, at_least=1,
                       help="suboptimality: the sum of costs found is at most w times optimal; 1 is optimal")
     heuristic: str = option("wdg", choices=HEURISTICS,
-                            help="high-level heuristic: wdg (weighted dependency graph), cg (cardinal conflicts) or none")
+                            help="high-level heuristic: wdg (weighted dependency graph), cg (cardinal conflicts) or "
+                                 "none")
     prioritize: bool = option(True, help="resolve cardinal conflicts first, then semi-cardinal, then the rest")
     bypass: bool = option(True, help="adopt a child's path of equal cost and fewer conflicts instead of branching")
     target: bool = option(True, help="target reasoning: a robot resting at its goal is split on 'arrives after t'")
     rectangle: bool = option(True,
-                             help="rectangle reasoning: one split for a rectangle of conflicts (classic, one-cell moves)")
+                             help="rectangle reasoning: one split for a rectangle of conflicts (classic, one-cell "
+                                  "moves)")
     corridor: bool = option(True,
-                            help="corridor reasoning: one split for robots meeting in a corridor (classic, reversible moves)")
+                            help="corridor reasoning: one split for robots meeting in a corridor (classic, reversible "
+                                 "moves)")
     focal: str = option("conflicts", choices=FOCALS,
                         help="with w > 1, which node within the bound is expanded: conflicts (fewest) or ees (EECBS)")
     max_nodes: int = option(1_000_000, at_least=1, help="constraint-tree nodes expanded before giving up")

@@ -17,13 +17,16 @@ class LoopOptions(MethodOptions):
     is refused (:meth:`check_instance`)."""
 
     load_transfer: bool = option(False,
-                                 help="robots hand loads over to one another (paper, equations 1-3); instances that move tiles")
+                                 help="robots hand loads over to one another (paper, equations 1-3); instances that "
+                                      "move tiles")
     d_tr: int = option(5, at_least=0,
                        help="Manhattan distance within which two robots consider a hand-over (with load_transfer)")
     max_steps: int | None = option(None, at_least=0,
-                                   help="the loop's step bound (default: 10x the summed carries plus W+H per job, at least 200)")
+                                   help="the loop's step bound (default: 10x the summed carries plus W+H per job, at "
+                                        "least 200)")
     active: list[int] | None = option(None,
-                                      help="the robots that take jobs (default: all; the others keep out of the way); instances that move tiles")
+                                      help="the robots that take jobs (default: all; the others keep out of the way); "
+                                           "instances that move tiles")
 
     def check_instance(self, instance) -> None:
         """``load_transfer``, ``d_tr`` and ``active`` are the reconfiguration loop's: refused on

@@ -103,7 +103,8 @@ class AnytimeOptions(MethodOptions):
     METHOD = "anytime"
     window: int = option(8, at_least=2, help="first window length of the neighbourhood search, in steps")
     slice: float = option(2.0, above=0,
-                          help="seconds the first window may take (each undecided window gives the next half as much again)")
+                          help="seconds the first window may take (each undecided window gives the next half as much "
+                               "again)")
     parallel: bool = option(True,
                             help="raise the bound in a child process on a second core while the windows are searched")
     solver: str = option("minisat22", choices=SOLVERS,
@@ -111,7 +112,8 @@ class AnytimeOptions(MethodOptions):
     bound_solver: str = option("cpsat", choices=SOLVERS, help="the bound search's back end: cpsat or a python-sat name")
     swap: bool = option(True, help="a window may end with interchangeable robots in one another's end states")
     incumbent: Schedule | None = option(None,
-                                        help="a valid schedule to start from instead of the heuristics' (--incumbent FILE)")
+                                        help="a valid schedule to start from instead of the heuristics' (--incumbent "
+                                             "FILE)")
     keep_class: bool = option(True, help="first decide the class that keeps the structure by the exact joint search")
 
 

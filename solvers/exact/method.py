@@ -84,15 +84,18 @@ class ModelOptions(MethodOptions):
     prune: bool = option(True, help="reachability and candidate-cell pruning (switch off to measure it)")
     prune_tiles: bool = option(True, help="reachability in time with the tiles, part of prune")
     single_carry: bool = option(False,
-                                help="only schedules that carry each tile once, start-only cell to goal-only cell (a class)")
+                                help="only schedules that carry each tile once, start-only cell to goal-only cell (a "
+                                     "class)")
     keep_structure: bool = option(False,
                                   help="only schedules that pick and place where start and goal differ (a class)")
     no_scaffold: bool = option(False,
-                               help="only schedules that never set a tile where neither start nor goal has one (a class)")
+                               help="only schedules that never set a tile where neither start nor goal has one (a "
+                                    "class)")
     incumbent: Schedule | None = option(None,
                                         help="a valid schedule to start from (--incumbent FILE): caps the horizon")
     travel_time: float | None = option(None, at_least=0,
-                                       help="seconds for minimizing tiles traveled (default: half the makespan search, at least 1)")
+                                       help="seconds for minimizing tiles traveled (default: half the makespan "
+                                            "search, at least 1)")
 
     def model(self) -> Options:
         return Options(prune_reach=self.prune, prune_cells=self.prune, prune_tiles=self.prune and self.prune_tiles,
@@ -121,7 +124,8 @@ class CpsatOptions(ModelOptions):
     presolve: bool = option(False,
                             help="CP-SAT's presolve for the makespan search (off: it costs more than it saves here)")
     first_horizon: int | None = option(None, at_least=1,
-                                       help="a guess of the optimum: search down from it while schedules are found, up while none is")
+                                       help="a guess of the optimum: search down from it while schedules are found, "
+                                            "up while none is")
 
 
 @dataclass(frozen=True)

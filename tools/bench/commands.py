@@ -12,7 +12,7 @@ from bille.instances.bundled import bundled_path
 
 from ..common import EXIT_NO, EXIT_OK, instance_arg, output_folder
 from .args import counts as _counts, names as _names
-from .proof_commands import bench_cbs, bench_interrupt
+from .proof_commands import bench_cbs, bench_interrupt, bench_peers
 from .joint import bench_joint
 from .loop_schedules import bench_loop_schedules
 from .solving import bench_anytime, bench_gaps
@@ -393,5 +393,5 @@ def bench_scale(robots: str, obstacles: str, size: int, seed: int, time_limit: f
     return EXIT_OK
 
 
-for _command in (bench_cbs, bench_interrupt):
+for _command in (bench_cbs, bench_interrupt, bench_peers):
     bench.add_command(_command)

@@ -36,6 +36,72 @@ def bench_cbs(instances, binary: str, time_limit: float) -> int:
     return EXIT_OK
 
 
+@click.command("peers")
+@click.option("--cbsh2-rtc", "cbsh2", type=click.Path(exists=True, dir_okay=False), default=None,
+              help="CBSH2-RTC's program (its build/cbs), built from its own repository.")
+@click.option("--eecbs", type=click.Path(exists=True, dir_okay=False), default=None,
+              help="EECBS's program (run with --suboptimality=1: optimal).")
+@click.option("--mrp-cbs", type=click.Path(exists=True, dir_okay=False), default=None,
+              help="libMultiRobotPlanning's cbs program.")
+@click.option("--lacam3", type=click.Path(exists=True, dir_okay=False), default=None,
+              help="lacam3's program (its build/main): first schedules, against bille's lacam -O improve=0.")
+@click.option("--optimal-rows", default=None, metavar="MAP:N,N;...",
+              help="Rows for the optimal peers (default: random-32-32-10:30,40,50,60;room-32-32-4:20,30,40;"
+                   "warehouse-10-20-10-2-1:20,40,60).")
+@click.option("--first-rows", default=None, metavar="MAP:N,N;...",
+              help="Rows for lacam3 (default: random-32-32-10:400;room-32-32-4:200;warehouse-10-20-10-2-1:500;"
+                   "random-64-64-20:500).")
+@click.option("--maps", "folder", type=click.Path(file_okay=False, exists=True), default=None,
+              help="Folder of MovingAI NAME.map and NAME-random-1.scen files (default: the maps shipped with bille).")
+@click.option("--time-limit", type=click.FloatRange(min=0.1), default=60.0, show_default=True, help="Seconds per run.")
+def bench_peers(cbsh2, eecbs, mrp_cbs, lacam3, optimal_rows, first_rows, folder, time_limit: float) -> int:
+    """bille's cbs and lacam beside the C++ peers named (each built from its own repository,
+    never by bille) on the same MovingAI rows, one after the other: times, sums of costs, and
+    the geometric mean of the time ratios (bille / peer) per peer."""
+    from pathlib import Path
+
+    from .maps import SCENARIO, shipped_maps
+    from .optimal import executable
+    from .sidebyside import FIRST_PEERS, FIRST_ROWS, OPTIMAL_PEERS, OPTIMAL_ROWS, parse_rows, side_by_side, table
+
+    given = {"cbsh2-rtc": cbsh2, "eecbs": eecbs, "mrp-cbs": mrp_cbs, "lacam3": lacam3}
+    peers = {name: Path(path) for name, path in given.items() if path is not None}
+    if not peers:
+        raise click.BadParameter("name at least one peer's program",
+                                 param_hint="--cbsh2-rtc/--eecbs/--mrp-cbs/--lacam3")
+    for name, path in peers.items():
+        if not executable(str(path)):
+            raise click.BadParameter(f"{path}: not an executable program", param_hint=f"--{name}")
+    where = shipped_maps() if folder is None else Path(folder)
+    plans = []
+    for option, text, default, names in (("--optimal-rows", optimal_rows, OPTIMAL_ROWS, OPTIMAL_PEERS),
+                                         ("--first-rows", first_rows, FIRST_ROWS, FIRST_PEERS)):
+        try:
+            rows = default if text is None else parse_rows(text)
+        except ValueError as exc:
+            raise click.BadParameter(str(exc), param_hint=option) from None
+        missing = [m for m, _ in rows if not ((where / f"{m}.map").is_file() and (where / f"{m}{SCENARIO}").is_file())]
+        if missing:
+            raise click.BadParameter(f"{', '.join(missing)}: no NAME.map with NAME-random-1.scen in {where}",
+                                     param_hint=option)
+        chosen = {n: p for n, p in peers.items() if n in names}
+        if chosen:
+            plans.append(("optimal" if option == "--optimal-rows" else "first", rows, chosen))
+
+    def told(row: dict) -> None:
+        peers_said = ", ".join(f"{n} {r.get('soc', r.get('status'))}" for n, r in row["peers"].items())
+        click.echo(f"{row['map']} {row['agents']} agents: bille {row['bille'].get('soc', row['bille']['status'])}, "
+                   f"{peers_said}", err=True)
+
+    for kind, rows, chosen in plans:
+        measured = list(side_by_side(where, rows, chosen, time_limit, kind, told))
+        click.echo("optimal sum of costs (bille -m cbs):" if kind == "optimal" else
+                   "first schedule (bille -m lacam -O improve=0):")
+        for line in table(measured, list(chosen), kind):
+            click.echo(line)
+    return EXIT_OK
+
+
 @click.command("interrupt")
 @click.option("--runs", type=click.IntRange(min=1), default=30, show_default=True, help="Runs in all.")
 @click.option("--pairs", default="lt-1:anytime,lt-6:anytime,bridge-2:cpsat,bridge-2:sat,lt-6:mstar,lt-1:lacam",
