@@ -156,6 +156,19 @@ def check_instance(inst: Instance, src: Source | None = None) -> Instance:
         if not mapf and not is_connected(grid.tiles, w, h):
             _disconnected(grid, "start" if key == "grid" else "goal", src, key)
 
+    _check_robots(inst, src)
+    _check_robot_goals(inst, src)
+    for k, task in enumerate(inst.tasks or ()):
+        for part in ("pick", "place"):
+            xy = getattr(task, part)
+            _inside(xy, start, src, ("tasks", k, part))
+            if start.obstacles[start.cell(*xy)]:
+                raise src.fail(("tasks", k, part), f"{xy} is an obstacle")
+    return inst
+
+
+def _check_robots(inst: Instance, src: Source) -> None:
+    """The collision rules, the robots' start cells (on the grid, apart) and the tile count."""
     if inst.collisions not in COLLISIONS:
         raise src.fail(("collisions",), f"unknown collision rules '{inst.collisions}' (expected one of: "
                                         f"{', '.join(COLLISIONS)})")
@@ -168,32 +181,30 @@ def check_instance(inst: Instance, src: Source | None = None) -> Instance:
                 raise src.fail(("robots", i, part), f"{cell} is also occupied by robots[{owners[cell]}]")
             owners[cell] = i
     carried = sum(r.carrying for r in inst.robots)
-    n_start, n_goal = int(start.tiles.sum()), int(goal.tiles.sum())
+    n_start, n_goal = int(inst.start.tiles.sum()), int(inst.goal_grid.tiles.sum())
     if n_goal != n_start + carried:
         raise src.fail(("goal",), f"the goal has {n_goal} tiles, but the start has {n_start} tiles "
                                   f"and {carried} carried: {n_start + carried} expected")
 
-    if inst.robot_goals is not None:
-        if len(inst.robot_goals) != inst.num_robots:
-            raise src.fail(("robot_goals",), f"{len(inst.robot_goals)} entries, expected one per robot "
-                                             f"({inst.num_robots}; null for no goal)")
-        seen: dict[XY, int] = {}
-        for i, g in enumerate(inst.robot_goals):
-            if g is None:
-                continue
-            _inside(g, start, src, ("robot_goals", i))
-            if not goal.tiles[goal.cell(*g)]:
-                raise src.fail(("robot_goals", i), f"{g} is not a tile of the goal structure; a robot's front foot must end on a tile")
-            if g in seen:
-                raise src.fail(("robot_goals", i), f"{g} is also the goal of robot {seen[g]}")
-            seen[g] = i
-    for k, task in enumerate(inst.tasks or ()):
-        for part in ("pick", "place"):
-            xy = getattr(task, part)
-            _inside(xy, start, src, ("tasks", k, part))
-            if start.obstacles[start.cell(*xy)]:
-                raise src.fail(("tasks", k, part), f"{xy} is an obstacle")
-    return inst
+
+def _check_robot_goals(inst: Instance, src: Source) -> None:
+    """One goal cell (or null) per robot, each on a goal tile and no two alike."""
+    if inst.robot_goals is None:
+        return
+    if len(inst.robot_goals) != inst.num_robots:
+        raise src.fail(("robot_goals",), f"{len(inst.robot_goals)} entries, expected one per robot "
+                                         f"({inst.num_robots}; null for no goal)")
+    goal, seen = inst.goal_grid, {}
+    for i, g in enumerate(inst.robot_goals):
+        if g is None:
+            continue
+        _inside(g, inst.start, src, ("robot_goals", i))
+        if not goal.tiles[goal.cell(*g)]:
+            raise src.fail(("robot_goals", i),
+                           f"{g} is not a tile of the goal structure; a robot's front foot must end on a tile")
+        if g in seen:
+            raise src.fail(("robot_goals", i), f"{g} is also the goal of robot {seen[g]}")
+        seen[g] = i
 
 
 def _disconnected(grid: Grid, which: str, src: Source, key: str):

@@ -257,42 +257,50 @@ def schedule_from_mrp(inst: Instance, data: dict, src: Source | str | None = Non
     if missing:
         raise src.fail(("schedule",), f"no path for agent {missing[0]!r}")
     starts, _ = _cells(inst)
-    paths = []
-    for i, name in enumerate(names):
-        entries = expect_list(plans[name], src, ("schedule", name), "a list of {x, y, t}")
-        if not entries:
-            raise src.fail(("schedule", name), "an empty path (it starts with {x, y, t: 0} at the agent's start)")
-        timed = []
-        for k, e in enumerate(entries):
-            where = ("schedule", name, k)
-            e = expect_mapping(e, src, where, required=("x", "y", "t"))
-            x, y, t = (_int(e[c], src, where + (c,)) for c in ("x", "y", "t"))
-            if timed and t <= timed[-1][0]:
-                raise src.fail(where + ("t",), f"time {t} does not come after time {timed[-1][0]}")
-            if not timed and (t != 0 or (x, y) != tuple(starts[i])):
-                raise src.fail(where, f"the path starts at ({x}, {y}) at time {t}; agent {name!r} starts at "
-                                      f"{tuple(starts[i])} at time 0")
-            timed.append((t, (x, y)))
-        paths.append((name, timed))
+    paths = [(name, _timed_path(plans[name], name, tuple(starts[i]), src)) for i, name in enumerate(names)]
     makespan = max(timed[-1][0] for _, timed in paths)
     check_steps(inst.num_robots, makespan, src.at(("schedule",)).rstrip(": ") or "the schedule")
-    rows = []
-    for name, timed in paths:
-        cell, row = timed[0][1], []
-        for k in range(1, len(timed)):
-            (t0, _), (t1, nxt) = timed[k - 1], timed[k]
-            move = MOVES.get((nxt[0] - cell[0], nxt[1] - cell[1]))
-            if move is None:
-                raise src.fail(("schedule", name, k), f"from {cell} at time {t1 - 1} to {nxt} at time {t1} is not "
-                                                      "one step")
-            row += ["wait"] * (t1 - t0 - 1) + [move]
-            cell = nxt
-        rows.append(tuple(row + ["wait"] * (makespan - len(row))))
+    rows = [_moves(name, timed, makespan, src) for name, timed in paths]
     meta = {"source": "libMultiRobotPlanning"}
     if keyed_by_index:
         meta["agents"] = (f"keyed by index (agent0 .. agent{len(names) - 1}), read in the instance's order "
                           f"({', '.join(names[:3])}{' ...' if len(names) > 3 else ''})")
     return Schedule(tuple(rows), meta=meta, instance=identity(inst))
+
+
+def _timed_path(entries, name: str, start: tuple, src: Source) -> list[tuple[int, tuple[int, int]]]:
+    """One agent's ``{x, y, t}`` entries as ``(t, (x, y))``, checked: from its start at time 0,
+    times strictly increasing."""
+    entries = expect_list(entries, src, ("schedule", name), "a list of {x, y, t}")
+    if not entries:
+        raise src.fail(("schedule", name), "an empty path (it starts with {x, y, t: 0} at the agent's start)")
+    timed = []
+    for k, e in enumerate(entries):
+        where = ("schedule", name, k)
+        e = expect_mapping(e, src, where, required=("x", "y", "t"))
+        x, y, t = (_int(e[c], src, where + (c,)) for c in ("x", "y", "t"))
+        if timed and t <= timed[-1][0]:
+            raise src.fail(where + ("t",), f"time {t} does not come after time {timed[-1][0]}")
+        if not timed and (t != 0 or (x, y) != start):
+            raise src.fail(where, f"the path starts at ({x}, {y}) at time {t}; agent {name!r} starts at "
+                                  f"{start} at time 0")
+        timed.append((t, (x, y)))
+    return timed
+
+
+def _moves(name: str, timed: list, makespan: int, src: Source) -> tuple[str, ...]:
+    """An agent's timed cells as ``makespan`` actions: unit moves, waits where a time is
+    skipped and after its last entry."""
+    cell, row = timed[0][1], []
+    for k in range(1, len(timed)):
+        (t0, _), (t1, nxt) = timed[k - 1], timed[k]
+        move = MOVES.get((nxt[0] - cell[0], nxt[1] - cell[1]))
+        if move is None:
+            raise src.fail(("schedule", name, k), f"from {cell} at time {t1 - 1} to {nxt} at time {t1} is not "
+                                                  "one step")
+        row += ["wait"] * (t1 - t0 - 1) + [move]
+        cell = nxt
+    return tuple(row + ["wait"] * (makespan - len(row)))
 
 
 def mrp_name(path: str | Path) -> bool:

@@ -136,27 +136,9 @@ def check_value(method: str, name: str, value: Any, hint, meta) -> None:
         if not optional:
             fail(_describe(base))
         return
-    if base is bool:
-        if not isinstance(value, bool):
-            fail("true or false")
-    elif base is int:
-        if isinstance(value, bool) or not isinstance(value, int):
-            fail("a whole number")
-    elif base is float:
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-            fail("a finite number")
-    elif base is str:
-        if not isinstance(value, str):
-            fail("a name")
-    elif typing.get_origin(base) is list:
-        inner = typing.get_args(base)[0] if typing.get_args(base) else int
-        if typing.get_origin(inner) is list:  # a list of lists: cells as [x, y] pairs
-            if not isinstance(value, list) or not all(isinstance(v, list) and len(v) == 2 and _whole(v) for v in value):
-                fail("a list of [x, y] pairs of whole numbers")
-        elif not isinstance(value, list) or not _whole(value):
-            fail("a list of whole numbers")
-    elif isinstance(base, type) and not isinstance(value, base):
-        fail(f"a {base.__name__}")
+    expected = _mistyped(base, value)
+    if expected is not None:
+        fail(expected)
     choices = meta.get("choices")
     if choices is not None and value not in choices:
         raise OptionError(f"{method}: unknown {name} {value!r} (expected one of: {', '.join(map(str, choices))})")
@@ -165,6 +147,33 @@ def check_value(method: str, name: str, value: Any, hint, meta) -> None:
             fail(f"a number above {meta['above']}")
         if meta.get("at_least") is not None and value < meta["at_least"]:
             fail(f"a number of at least {meta['at_least']}")
+
+
+def _number(value: Any) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+# the type of an option -> (whether a value fits it, what the message says it expects)
+_SCALARS = {bool: (lambda v: isinstance(v, bool), "true or false"),
+            int: (lambda v: isinstance(v, int) and not isinstance(v, bool), "a whole number"),
+            float: (lambda v: _number(v) and math.isfinite(v), "a finite number"),
+            str: (lambda v: isinstance(v, str), "a name")}
+
+
+def _mistyped(base, value: Any) -> str | None:
+    """What the type ``base`` expects, if ``value`` (not None) does not fit it; None if it fits."""
+    if base in _SCALARS:
+        fits, expected = _SCALARS[base]
+        return None if fits(value) else expected
+    if typing.get_origin(base) is list:
+        inner = typing.get_args(base)[0] if typing.get_args(base) else int
+        if typing.get_origin(inner) is list:  # a list of lists: cells as [x, y] pairs
+            ok = isinstance(value, list) and all(isinstance(v, list) and len(v) == 2 and _whole(v) for v in value)
+            return None if ok else "a list of [x, y] pairs of whole numbers"
+        return None if isinstance(value, list) and _whole(value) else "a list of whole numbers"
+    if isinstance(base, type) and not isinstance(value, base):
+        return f"a {base.__name__}"
+    return None
 
 
 def _whole(values) -> bool:

@@ -52,17 +52,7 @@ def solve_(instance: str, method: str, epsilon, horizon, time_limit, threads, lo
     if time_limit is not None and time_limit <= 0:
         raise click.BadParameter("must be positive", param_hint="--time-limit")
     if "help" in extra:  # -O help: the method's options, nothing solved
-        from .methods_command import describe, described
-
-        if method not in METHODS:
-            raise click.BadParameter(f"unknown method '{method}' (expected one of: {', '.join(METHODS)})",
-                                     param_hint="-m/--method")
-        if as_json:
-            print_json(described(method))
-            return EXIT_OK
-        for line in describe(method):
-            click.echo(line)
-        return EXIT_OK
+        return _option_help(method, as_json)
     writable(output, rrd, log_path)
     flags = (("--epsilon", "epsilon", epsilon), ("-H/--horizon", "horizon", horizon),
              ("--time-limit", "time_limit", time_limit), ("--threads", "threads", threads),
@@ -87,28 +77,50 @@ def solve_(instance: str, method: str, epsilon, horizon, time_limit, threads, lo
         schedule = None if result.schedule is None else [list(row) for row in result.schedule.actions]
         print_json({**result.to_json(), "schedule": schedule})
         return exit_code(result)
-    click.echo(summary_line(method, result))
-    if "auto" in result.stats:
-        click.echo(f"auto chose {result.stats['auto']['method']}: {result.stats['auto']['why']}")
-    if "objective" in result.stats:  # what optimal means when it is not the makespan of every schedule
-        click.echo(f"objective: {result.stats['objective']}")
-    if "restricted_lower_bound" in result.stats:
-        click.echo(f"lower bound among those schedules: {result.stats['restricted_lower_bound']}")
-    if "class_bounds" in result.stats:
-        from bille.solvers.classes import report
-
-        makespan = result.metrics.makespan if result.metrics else None
-        for line in report(makespan, result.lower_bound, result.stats["class_bounds"], result.stats.get("classes")):
-            click.echo(line)
-    for key in ("unreachable", "failure", "stopped", "reason", "violation"):
-        if key in result.stats:
-            click.echo(f"{key}: {_explain(inst, key, result.stats[key])}")
-    if result.stats.get("load_transfer"):
-        click.echo(f"load transfers: {result.stats['relays']} relays, {result.stats['swaps']} swaps "
-                   f"({result.stats['pairs_considered']} robot pairs within d_tr considered)")
+    for line in _result_lines(inst, method, result):
+        click.echo(line)
     if output and result.schedule is not None:
         click.echo(f"schedule written to {output}")
     return exit_code(result)
+
+
+def _option_help(method: str, as_json: bool) -> int:
+    """``-O help``: the method's options (text or JSON), nothing solved."""
+    from .methods_command import describe, described
+
+    if method not in METHODS:
+        raise click.BadParameter(f"unknown method '{method}' (expected one of: {', '.join(METHODS)})",
+                                 param_hint="-m/--method")
+    if as_json:
+        print_json(described(method))
+        return EXIT_OK
+    for line in describe(method):
+        click.echo(line)
+    return EXIT_OK
+
+
+def _result_lines(inst, method: str, result) -> list[str]:
+    """The text ``bille solve`` prints of a result: the summary, then what the claim means (the
+    objective, the class bounds), why it stopped, and the load transfers."""
+    stats = result.stats
+    lines = [summary_line(method, result)]
+    if "auto" in stats:
+        lines.append(f"auto chose {stats['auto']['method']}: {stats['auto']['why']}")
+    if "objective" in stats:  # what optimal means when it is not the makespan of every schedule
+        lines.append(f"objective: {stats['objective']}")
+    if "restricted_lower_bound" in stats:
+        lines.append(f"lower bound among those schedules: {stats['restricted_lower_bound']}")
+    if "class_bounds" in stats:
+        from bille.solvers.classes import report
+
+        makespan = result.metrics.makespan if result.metrics else None
+        lines += report(makespan, result.lower_bound, stats["class_bounds"], stats.get("classes"))
+    lines += [f"{key}: {_explain(inst, key, stats[key])}" for key in ("unreachable", "failure", "stopped", "reason",
+                                                                        "violation") if key in stats]
+    if stats.get("load_transfer"):
+        lines.append(f"load transfers: {stats['relays']} relays, {stats['swaps']} swaps "
+                     f"({stats['pairs_considered']} robot pairs within d_tr considered)")
+    return lines
 
 
 @click.command("plan-sequence")
