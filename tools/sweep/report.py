@@ -25,19 +25,8 @@ def summary(rows: list[dict]) -> list[str]:
     """The table per method configuration, then why runs failed and any contradiction."""
     from .results import contradictions
 
-    body = []
-    for label in dict.fromkeys(r["label"] for r in rows):
-        mine = [r for r in rows if r["label"] == label]
-        applies = [r for r in mine if r["status"] != "n/a"]
-        ok = [r for r in applies if solved(r)]
-        gaps = [100.0 * r["certified_gap"] for r in ok if r.get("certified_gap") is not None]
-        times = [r["time_s"] for r in ok if r.get("time_s") is not None]
-        failed = sum(r["status"] in FAILED for r in mine)
-        body.append([label, len(mine), len(mine) - len(applies),
-                     f"{100.0 * len(ok) / len(applies):.0f}%" if applies else None, failed,
-                     len(applies) - len(ok) - failed,
-                     f"{statistics.median(gaps):.1f}%" if gaps else None, f"{max(gaps):.1f}%" if gaps else None,
-                     f"{statistics.median(times):.3f}" if times else None])
+    body = [_summary_row(label, [r for r in rows if r["label"] == label])
+            for label in dict.fromkeys(r["label"] for r in rows)]
     right = {"runs", "n/a", "success", "failed", "no schedule", "median certified gap", "worst certified gap",
              "median time [s]"}
     out = text_table(["method", "runs", "n/a", "success", "failed", "no schedule", "median certified gap",
@@ -60,6 +49,19 @@ def summary(rows: list[dict]) -> list[str]:
                 for kind, (n, first) in unsolved.items()]
     out += [f"contradiction: {line}" for line in contradictions(rows)]
     return out
+
+
+def _summary_row(label: str, mine: list[dict]) -> list:
+    """One configuration's line of :func:`summary`: runs, not applicable, success, failures,
+    runs without a schedule, certified gaps and the median time."""
+    applies = [r for r in mine if r["status"] != "n/a"]
+    ok = [r for r in applies if solved(r)]
+    gaps = [100.0 * r["certified_gap"] for r in ok if r.get("certified_gap") is not None]
+    times = [r["time_s"] for r in ok if r.get("time_s") is not None]
+    failed = sum(r["status"] in FAILED for r in mine)
+    return [label, len(mine), len(mine) - len(applies), f"{100.0 * len(ok) / len(applies):.0f}%" if applies else None,
+            failed, len(applies) - len(ok) - failed, f"{statistics.median(gaps):.1f}%" if gaps else None,
+            f"{max(gaps):.1f}%" if gaps else None, f"{statistics.median(times):.3f}" if times else None]
 
 
 def _short(text: str) -> str:

@@ -125,14 +125,9 @@ def load_spec(path: str | Path) -> Spec:
     return parse_spec(data, path, src)
 
 
-def parse_spec(data, path: Path, src=None) -> Spec:
-    def at(*field) -> str:
-        line = src.line(field) if src is not None else None
-        return f"{path}:{line}" if line else str(path)
-
-    def fail(msg, *field):
-        raise BilleError(f"{at(*field)}: {msg}")
-
+def _settings(data, path: Path, fail) -> tuple:
+    """A sweep file's ``time_limit``, ``memory_limit``, ``max_runs`` and ``name``, checked
+    (``fail(message, *field)`` raises), after its top level: a mapping of known keys."""
     if not isinstance(data, dict):
         fail("expected a mapping with instances and methods")
     unknown = set(data) - set(KEYS)
@@ -152,6 +147,18 @@ def parse_spec(data, path: Path, src=None) -> Spec:
     if not isinstance(name, str) or not _NAME.match(name) or set(name) == {"."}:
         fail(f"name: {name!r} is not a safe file name (letters, digits, '-', '_', '.'; no separators), the "
              "results folder is sweep-NAME" + ("" if "name" in data else ": give one with name:"), "name")
+    return time_limit, memory, max_runs, name
+
+
+def parse_spec(data, path: Path, src=None) -> Spec:
+    def at(*field) -> str:
+        line = src.line(field) if src is not None else None
+        return f"{path}:{line}" if line else str(path)
+
+    def fail(msg, *field):
+        raise BilleError(f"{at(*field)}: {msg}")
+
+    time_limit, memory, max_runs, name = _settings(data, path, fail)
     if not isinstance(data.get("instances"), list) or not data["instances"]:
         fail("instances: expected a list of bundled names, files, globs or {gen: ...} calls", "instances")
     methods = data.get("methods", {"auto": {}})  # the default method, as bille solve's
