@@ -209,6 +209,21 @@ def _load(what: str, file: str, sha: str, where: str, loader):
         raise ExecutionError(f"{where}: {exc}") from None
 
 
+def _check_order(kind: str, step: int, length: int, released: int, finished: int, where: str) -> None:
+    """A ``released``, ``finished`` or ``fault`` line in its place: its step inside the plan,
+    released and finished one after the other, finished only once released."""
+    if not 1 <= step <= length:
+        raise ExecutionError(f"{where}: step {step} is outside the plan (steps 1 to {length})")
+    if kind == "released" and step != finished + 1:
+        raise ExecutionError(f"{where}: step {step} released after step {finished} finished (expected step "
+                             f"{finished + 1})")
+    if kind == "fault" and step != finished + 1:
+        raise ExecutionError(f"{where}: a fault of step {step} after step {finished} finished")
+    if kind == "finished" and (step != finished + 1 or step > released):
+        raise ExecutionError(f"{where}: step {step} finished, but " + (
+            f"step {finished} was the last finished" if step != finished + 1 else "it was never released"))
+
+
 def replay(path: str | Path, secret: bytes | None = None) -> Replayed:
     """Rebuild a run from its journal, checked line by line (see the module docstring); raises
     :class:`ExecutionError` naming the first line that an executor cannot have written."""
@@ -255,16 +270,7 @@ def replay(path: str | Path, secret: bytes | None = None) -> Replayed:
                                      "finished")
             done = True
             continue
-        if not 1 <= step <= length:
-            raise ExecutionError(f"{where}: step {step} is outside the plan (steps 1 to {length})")
-        if kind == "released" and step != finished + 1:
-            raise ExecutionError(f"{where}: step {step} released after step {finished} finished (expected step "
-                                 f"{finished + 1})")
-        if kind == "fault" and step != finished + 1:
-            raise ExecutionError(f"{where}: a fault of step {step} after step {finished} finished")
-        if kind == "finished" and (step != finished + 1 or step > released):
-            raise ExecutionError(f"{where}: step {step} finished, but " + (
-                f"step {finished} was the last finished" if step != finished + 1 else "it was never released"))
+        _check_order(kind, step, length, released, finished, where)
         if kind == "released":
             released = step
         elif kind == "finished":
