@@ -33,8 +33,8 @@ def meeting(cells: np.ndarray, k: int) -> list[int]:
 
 class ClassicAvoid:
     """The conflict-avoidance table of :class:`~.lowlevel.Avoid` for point robots: robots on a
-    cell at a time (a flat list indexed ``t * size + cell``) and the moves made in each step, as
-    the same counts (a tie-breaker only)."""
+    cell at a time (counts keyed ``t * size + cell``) and the moves made in each step, as
+    the same counts (a tie-breaker only), both sparse."""
 
     def __init__(self, paths: list[Path | None], skip: int, size: int) -> None:
         others = [p for k, p in enumerate(paths) if k != skip and p is not None]
@@ -42,11 +42,13 @@ class ClassicAvoid:
         self.last = max((p.cost for p in others), default=0)
         length = self.last + 2
         if not others:
-            self.at, self.moves = [0] * (length * size), set()
+            self.at, self.moves = {}, set()
             return
         cells = matrix(others, length)
         times = np.arange(length, dtype=np.int64)[None, :]
-        self.at = np.bincount((times * size + cells).ravel(), minlength=length * size).tolist()
+        # sparse: the robots' cells at each time are few against every cell at every time
+        codes, counts = np.unique((times * size + cells).ravel(), return_counts=True)
+        self.at = dict(zip(codes.tolist(), counts.tolist()))
         before, after = cells[:, :-1], cells[:, 1:]
         moved = before != after
         codes = ((times[:, 1:] * size + before) * size + after)[moved]
@@ -55,8 +57,8 @@ class ClassicAvoid:
     def count(self, p: int, q: int, cells: frozenset, t: int) -> int:
         size = self.size
         if t > self.last:
-            return self.at[(self.last + 1) * size + q]
-        n = self.at[t * size + q]
+            return self.at.get((self.last + 1) * size + q, 0)
+        n = self.at.get(t * size + q, 0)
         if p != q and ((t * size + q) * size + p) in self.moves:  # someone moves q -> p then
             n += 1
         return n

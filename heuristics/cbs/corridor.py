@@ -51,11 +51,18 @@ class Corridors:
     def __init__(self, agents: list[Agent]) -> None:
         self.agents = agents
         self._chains: dict[tuple[int, int], tuple | None] = {}
-        self._dist: dict[tuple[int, frozenset], list[int]] = {}
+        self._dist: dict[tuple[int, frozenset], tuple[dict, deque]] = {}  # searches under way
+        self._neighbours: dict[tuple[int, int], list[int]] = {}
 
     def neighbours(self, k: int, p: int) -> list[int]:
-        """The cells robot ``k`` can move to from ``p`` (each once: two actions may go alike)."""
-        return list(dict.fromkeys(q for _, q, _ in self.agents[k].moves(p) if q != p))
+        """The cells robot ``k`` can move to from ``p`` (each once: two actions may go alike);
+        cached per walking graph, which robots of one moveset share."""
+        moves = self.agents[k].moves
+        key = (id(getattr(moves, "__self__", moves)), p)
+        found = self._neighbours.get(key)
+        if found is None:
+            found = self._neighbours[key] = list(dict.fromkeys(q for _, q, _ in moves(p) if q != p))
+        return found
 
     def chain(self, k: int, v: int) -> tuple[frozenset, int, int, int] | None:
         """``(C, a, b, k)`` for the corridor through cell ``v`` of robot ``k``'s graph, or None."""
@@ -80,25 +87,24 @@ class Corridors:
         return frozenset(cells), a, b, len(cells)
 
     def distance(self, k: int, target: int, avoid: frozenset = frozenset()) -> int:
-        """Robot ``k``'s walking distance from its start to ``target`` avoiding ``avoid``."""
+        """Robot ``k``'s walking distance from its start to ``target`` avoiding ``avoid``: a
+        breadth-first search from the start kept per ``(k, avoid)`` and taken only as far as the
+        targets asked for so far need (so a near target costs a few cells, not the map)."""
         key = (k, avoid)
-        table = self._dist.get(key)
-        if table is None:
+        search = self._dist.get(key)
+        if search is None:
             if len(self._dist) > 4096:
                 self._dist.clear()
-            table = self._dist[key] = self._bfs(k, avoid)
-        return table.get(target, NEVER)
-
-    def _bfs(self, k: int, avoid: frozenset) -> dict[int, int]:
-        start = self.agents[k].start
-        seen, queue = {start: 0}, deque([start])
-        while queue:
+            start = self.agents[k].start
+            search = self._dist[key] = ({start: 0}, deque([start]))
+        seen, queue = search
+        while target not in seen and queue:
             p = queue.popleft()
             for q in self.neighbours(k, p):
                 if q not in seen and q not in avoid:
                     seen[q] = seen[p] + 1
                     queue.append(q)
-        return seen
+        return seen.get(target, NEVER)
 
     def split(self, conflict, paths: list[Path], mdds: tuple[MDD | None, MDD | None]):
         """The corridor split of a vertex or swap ``conflict`` as ``((CORRIDOR, i, j, t, (B1,
