@@ -34,13 +34,8 @@ from ..limits import check_size
 from ..moveset import load_moveset
 
 
-def bridges(*, platforms: int = 2, width: int = 4, height: int = 4, gap: int = 6, bays: tuple[int, ...] = (3,),
-            moved: int = 4, robots: tuple[int, ...] | None = None, moveset: str = "S7", tasks: bool = False,
-            name: str | None = None) -> Instance:
-    """A map of platforms joined by bridges (module docstring). ``robots``: per platform, west
-    first (default one each). Raises :class:`InstanceError` for numbers that do not make such a
-    map (one line naming the number)."""
-    robots = tuple(robots) if robots is not None else (1,) * platforms
+def _check_numbers(platforms: int, width: int, height: int, gap: int, bays, moved: int, robots: tuple) -> None:
+    """Raise :class:`InstanceError` for numbers that make no map of :func:`bridges`."""
     if platforms < 2:
         raise InstanceError(f"gen bridges: at least 2 platforms, got {platforms}")
     if width < 4 or height < 3:
@@ -58,6 +53,32 @@ def bridges(*, platforms: int = 2, width: int = 4, height: int = 4, gap: int = 6
     if any(not 0 <= r <= height for r in robots) or not sum(robots):
         raise InstanceError(f"gen bridges: 0 to {height} robots per platform and at least one in all, got "
                             f"{','.join(map(str, robots))}")
+
+
+def _robots(ms, robots: tuple, lefts: list[int], row: int, height: int) -> list[Robot]:
+    """``robots[p]`` robots on platform ``p``, the bridge's row first, facing the bridge (those of
+    the west platform east, the others west)."""
+    placed = []
+    rows = [row] + [y for y in range(1, 1 + height) if y != row]
+    for p, count in enumerate(robots):
+        for y in rows[:count]:
+            if ms.footprint == "point":
+                placed.append(Robot((lefts[p] + 1, y) if p == 0 else (lefts[p], y)))
+            elif p == 0:
+                placed.append(Robot((lefts[p] + 2, y), (lefts[p] + 1, y)))
+            else:
+                placed.append(Robot((lefts[p] + 1, y), (lefts[p] + 2, y)))
+    return placed
+
+
+def bridges(*, platforms: int = 2, width: int = 4, height: int = 4, gap: int = 6, bays: tuple[int, ...] = (3,),
+            moved: int = 4, robots: tuple[int, ...] | None = None, moveset: str = "S7", tasks: bool = False,
+            name: str | None = None) -> Instance:
+    """A map of platforms joined by bridges (module docstring). ``robots``: per platform, west
+    first (default one each). Raises :class:`InstanceError` for numbers that do not make such a
+    map (one line naming the number)."""
+    robots = tuple(robots) if robots is not None else (1,) * platforms
+    _check_numbers(platforms, width, height, gap, bays, moved, robots)
     ms = load_moveset(moveset)
     W, H = 1 + platforms * width + (platforms - 1) * gap + 2, height + 2
     check_size([ms], W, H, "gen bridges")
@@ -75,16 +96,7 @@ def bridges(*, platforms: int = 2, width: int = 4, height: int = 4, gap: int = 6
     east = lefts[-1] + width
     goal[1:1 + moved, 1] = False
     goal[1:1 + moved, east] = True
-    placed = []
-    rows = [row] + [y for y in range(1, 1 + height) if y != row]
-    for p, count in enumerate(robots):
-        for y in rows[:count]:
-            if ms.footprint == "point":
-                placed.append(Robot((lefts[p] + 1, y) if p == 0 else (lefts[p], y)))
-            elif p == 0:
-                placed.append(Robot((lefts[p] + 2, y), (lefts[p] + 1, y)))
-            else:
-                placed.append(Robot((lefts[p] + 1, y), (lefts[p] + 2, y)))
+    placed = _robots(ms, robots, lefts, row, height)
     plan = tuple(Task((1, y), (east, y)) for y in range(1, 1 + moved)) if tasks else None
     zeros = np.zeros(W * H, dtype=bool)
     label = name or (f"bridges-{platforms}x{width}x{height}-g{gap}-b{'.'.join(map(str, bays)) or 'none'}"
