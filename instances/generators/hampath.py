@@ -186,6 +186,34 @@ def tiles_grid(width: int, height: int, cells) -> Grid:
 # ---------------------------------------------------------------------------------------------
 # exhaustive search over the single robot's states, for the reductions' small cases
 
+def _sites(inst: Instance, walk: np.ndarray, task_set: set[int]) -> dict[int, int]:
+    """Each task cell's site: its one neighbour on ``walk`` outside the task cells (a robot
+    stands there to pick or place on it); InstanceError where there is not exactly one."""
+    nbr = neighbour_table(inst.width, inst.height)
+    site = {}
+    for c in sorted(task_set):
+        around = [m for m in nbr[c].tolist() if m >= 0 and walk[m] and m not in task_set]
+        if len(around) != 1:
+            raise InstanceError(f"search_optimum: task cell {inst.world.xy(c)} has {len(around)} tile neighbours, "
+                                "not 1")
+        site[c] = around[0]
+    return site
+
+
+def _successors(world, graph, s: State, task_set: set[int]):
+    """``(action, state)`` of every action of the one robot from ``s`` that the rules allow, its
+    picks and places on the task cells only."""
+    p = s.poses[0]
+    for a in range(graph.num_actions):
+        if graph.succ[p, a] < 0:
+            continue
+        if int(graph.kind[a]) in (Kind.PICK, Kind.PLACE) and int(graph.target[p, a]) not in task_set:
+            continue
+        new = apply(world, s, [a])
+        if isinstance(new, State):
+            yield a, new
+
+
 def search_optimum(inst: Instance, limit: int, *, max_states: int = 2_000_000):
     """An optimal schedule of a one-robot instance if its makespan is at most ``limit``;
     ``None`` when no schedule of at most ``limit`` steps exists. A goal cell of the robot counts.
@@ -209,13 +237,7 @@ def search_optimum(inst: Instance, limit: int, *, max_states: int = 2_000_000):
     start_tiles, goal = inst.start.tiles, inst.goal_tiles
     walk = start_tiles | goal
     task_set = {int(c) for c in np.flatnonzero(start_tiles != goal)}
-    nbr = neighbour_table(inst.width, inst.height)
-    site = {}
-    for c in sorted(task_set):
-        around = [m for m in nbr[c].tolist() if m >= 0 and walk[m] and m not in task_set]
-        if len(around) != 1:
-            raise InstanceError(f"search_optimum: task cell {world.xy(c)} has {len(around)} tile neighbours, not 1")
-        site[c] = around[0]
+    site = _sites(inst, walk, task_set)
     # a point robot's pose is its cell, and its walks are symmetric: distances from a site
     walking = Walk(graph, walk)
     end = int(inst.goal_cells[0])
@@ -244,15 +266,7 @@ def search_optimum(inst: Instance, limit: int, *, max_states: int = 2_000_000):
             return None
         nxt = []
         for s in frontier:
-            p = s.poses[0]
-            for a in range(graph.num_actions):
-                if graph.succ[p, a] < 0:
-                    continue
-                if int(graph.kind[a]) in (Kind.PICK, Kind.PLACE) and int(graph.target[p, a]) not in task_set:
-                    continue
-                new = apply(world, s, [a])
-                if not isinstance(new, State):
-                    continue
+            for a, new in _successors(world, graph, s, task_set):
                 key = new.key()
                 if key in parent or depth + 1 + h(new) > limit:
                     continue
