@@ -69,16 +69,10 @@ def routing_bound(instance: Instance, ground, budget: Budget | None = None, plac
     schedule of the class). ``places``: groups of cells, each of which the schedules considered
     place a tile on at least once (a row ``sum of the places on the group >= 1`` each: the flow
     of such a schedule meets it); a group no robot can place on gives None."""
-    world, state = instance.world, instance.start_state
+    world = instance.world
     n = world.width * world.height
     graphs = list({id(g): g for g in world.graphs}.values())
-    faces = {Kind.PICK: {}, Kind.PLACE: {}}  # kind -> graph id -> cell -> poses
-    for g in graphs:
-        for kind in faces:
-            poses, cells = ground.targets(g, kind, n)
-            per = faces[kind].setdefault(id(g), {})
-            for p, c in zip(poses.tolist(), cells.tolist()):
-                per.setdefault(c, []).append(p)
+    faces = _faces(ground, graphs, n)
     cells = sorted(set().union(*(per.keys() for kind in faces.values() for per in kind.values())))
     if not cells or len(cells) > MAX_CELLS:
         return None
@@ -107,22 +101,43 @@ def routing_bound(instance: Instance, ground, budget: Budget | None = None, plac
     carry = np.minimum.reduce([from_sets(g, Kind.PICK, Kind.PLACE) for g in graphs])
     walk = np.minimum.reduce([from_sets(g, Kind.PLACE, Kind.PICK) for g in graphs])
     m = instance.num_robots
-    goal_cells = instance.goal_cells
-    ends = np.full(k, INF, dtype=np.int64)  # a walk from a place at cells[j] to some robot's end
-    robot_rows = []
+    robot_rows, ends = _robot_rows(instance, ground, faces, cells)
+    groups = [[index[c] for c in group if c in index] for group in places]
+    if not all(groups):
+        return None
+    return _solve(k, m, balance, carry, walk, ends, robot_rows, budget, groups, split)
+
+
+def _faces(ground, graphs, n: int) -> dict:
+    """``kind -> graph id -> cell -> poses``: the poses of each graph whose pick (place) targets
+    each cell, from ``ground``."""
+    faces = {Kind.PICK: {}, Kind.PLACE: {}}
+    for g in graphs:
+        for kind in faces:
+            poses, cells = ground.targets(g, kind, n)
+            per = faces[kind].setdefault(id(g), {})
+            for p, c in zip(poses.tolist(), cells.tolist()):
+                per.setdefault(c, []).append(p)
+    return faces
+
+
+def _robot_rows(instance: Instance, ground, faces: dict, cells: list[int]):
+    """Per robot ``(first, alone, carrying)``: the steps to its first event at each cell (a place
+    if it carries, a pick otherwise), the steps to its end without any event, and whether it
+    carries; and ``ends[j]``: the least walk from a place at ``cells[j]`` to some robot's end."""
+    world, state, goal_cells = instance.world, instance.start_state, instance.goal_cells
+    ends = np.full(len(cells), INF, dtype=np.int64)
+    rows = []
     for r, (g, p) in enumerate(zip(world.graphs, state.poses)):
         relaxed = ground.relaxed(g)
         here = relaxed.from_pose(p)
         to_goal = relaxed.to_front(goal_cells[r]) if goal_cells[r] >= 0 else np.zeros(g.num_poses, np.int64)
         first = Kind.PLACE if state.carrying[r] else Kind.PICK
         row = np.array([here[faces[first][id(g)][c]].min() if c in faces[first][id(g)] else INF for c in cells])
-        robot_rows.append((row, int(to_goal[p]), bool(state.carrying[r])))
+        rows.append((row, int(to_goal[p]), bool(state.carrying[r])))
         place = faces[Kind.PLACE][id(g)]
         ends = np.minimum(ends, [to_goal[place[c]].min() if c in place else INF for c in cells])
-    groups = [[index[c] for c in group if c in index] for group in places]
-    if not all(groups):
-        return None
-    return _solve(k, m, balance, carry, walk, ends, robot_rows, budget, groups, split)
+    return rows, ends
 
 
 def _mask(n: int, cells: list[int]) -> np.ndarray:
