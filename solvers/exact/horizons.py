@@ -21,7 +21,7 @@ from .search import Search
 
 def sequential(search: Search) -> Result:
     """The search of the module docstring on ``search``'s state; its result."""
-    job, inst = search.job, search.instance
+    job = search.job
     T = search.proved_below
     if job.first_horizon is not None:
         T = min(max(T, job.first_horizon), search.cap)
@@ -29,16 +29,14 @@ def sequential(search: Search) -> Result:
     found = None  # (T, model, backend, outcome) of the smallest satisfiable horizon so far
     try:
         while T <= search.cap:
-            if found is None and search.incumbent is not None and search.proved_below >= search.incumbent.shape[1]:
+            if found is None and incumbent_proved(search):
                 return search.proved_incumbent()
             if span is None or not span[2] <= T <= span[3]:
                 if span is not None and (found is None or span[1] is not found[2]):
                     span[1].close()
                 span = None
-                last = min(search.cap, T + job.chunk - 1) if job.incremental else T
                 try:
-                    model = job.model(inst, last, T, search.budget)
-                    span = (model, job.open(model, inst, search.budget), T, last)
+                    span = _open(search, T)
                 except OutOfTime:
                     return search.timeout()
             model, backend = span[0], span[1]
@@ -56,7 +54,7 @@ def sequential(search: Search) -> Result:
                 T += 1
                 continue
             found = (T, model, backend, outcome)
-            search.incumbent = decode(model, inst, outcome.value)[:, :T]
+            search.incumbent = decode(model, search.instance, outcome.value)[:, :T]
             if T <= search.proved_below:
                 break
             T -= 1
@@ -66,3 +64,18 @@ def sequential(search: Search) -> Result:
     finally:
         for backend in {id(b): b for b in (span and span[1], found and found[2]) if b}.values():
             backend.close()
+
+
+def incumbent_proved(search: Search) -> bool:
+    """Whether every horizon below the incumbent's makespan is proved to have no schedule."""
+    return search.incumbent is not None and search.proved_below >= search.incumbent.shape[1]
+
+
+def _open(search: Search, T: int) -> tuple:
+    """``(model, backend, first, last)``: a model open for horizons ``T`` .. ``last`` (one
+    horizon, or ``chunk`` of them for an incremental back end). Raises OutOfTime."""
+    job, inst = search.job, search.instance
+    last = min(search.cap, T + job.chunk - 1) if job.incremental else T
+    model = job.model(inst, last, T, search.budget)
+    return model, job.open(model, inst, search.budget), T, last
+

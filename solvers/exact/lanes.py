@@ -16,6 +16,7 @@ from bille.encodings.model import OutOfTime
 from bille.encodings.solution import decode
 from bille.instances.result import Result
 
+from .horizons import incumbent_proved
 from .search import Search
 
 
@@ -33,7 +34,7 @@ def parallel(search: Search) -> Result:
         while True:
             if answers.get(search.proved_below) == SAT:
                 break
-            if search.incumbent is not None and search.proved_below >= search.incumbent.shape[1] and not found:
+            if not found and incumbent_proved(search):
                 return search.proved_incumbent()
             best = min(found, default=None)
             while len(running) < lanes and next_T <= search.cap and (best is None or next_T < best):
@@ -70,23 +71,28 @@ def parallel(search: Search) -> Result:
                             stopped.add(U)
                             b.stop()
     finally:
-        for T, _, backend in running.values():
-            stopped.add(T)
-            backend.stop()
-        while running:  # a stop may land before its solve began: repeat it until all are done
-            done, _ = wait(running, timeout=0.05)
-            for future in done:
-                running.pop(future)
-            for _, _, backend in running.values():
-                backend.stop()
-        pool.shutdown(wait=True)
-        for row in search.stats["horizons"]:  # the horizons left undecided when the search ended
-            row.setdefault("answer", "stopped" if row["T"] in stopped else UNKNOWN)
+        _stop(search, pool, running, stopped)
     T = search.proved_below
     model, backend, outcome = found[T]
     search.incumbent = decode(model, inst, outcome.value)  # kept if the minimization is interrupted
     backend.tune(threads=lanes)  # the minimization of tiles traveled gets every worker
     return search.optimal(T, model, backend, outcome)
+
+
+def _stop(search: Search, pool, running: dict, stopped: set[int]) -> None:
+    """Stop the lanes still running and wait for them; mark each horizon left undecided."""
+    for T, _, backend in running.values():
+        stopped.add(T)
+        backend.stop()
+    while running:  # a stop may land before its solve began: repeat it until all are done
+        done, _ = wait(running, timeout=0.05)
+        for future in done:
+            running.pop(future)
+        for _, _, backend in running.values():
+            backend.stop()
+    pool.shutdown(wait=True)
+    for row in search.stats["horizons"]:  # the horizons left undecided when the search ended
+        row.setdefault("answer", "stopped" if row["T"] in stopped else UNKNOWN)
 
 
 def _lane(backend, budget) -> tuple:
