@@ -200,32 +200,7 @@ class _Anytime:
             rise = rise or Rise(inst, self.bound_solver, bracket, budget)
             seek = _Seek(inst, self.cut, budget, self.total)
             while not bracket.closed and not budget.expired() and not seek.infeasible:
-                part = budget.child(0 if background else self.slice)
-                rise.step(part)
-                self.stats["bound_s"] += part.elapsed()
-                if bracket.best is None and not bracket.closed:
-                    began = budget.now()
-                    found = seek.step()
-                    self.stats["seek_s"] = round(self.stats.get("seek_s", 0.0) + budget.now() - began, 3)
-                    if found is not None:
-                        self.start_from(found)
-                    continue
-                if bracket.closed:
-                    continue
-                part, makespan = budget.child(self.slice), bracket.best.makespan
-                self.windows[0].step(part)
-                if bracket.best.makespan == makespan:  # the search that shortened it last goes on
-                    self.windows.reverse()
-                self.stats["search_s"] += part.elapsed()
-                if not self._stalled() or bracket.closed:
-                    continue
-                began = budget.now()
-                if ahead is not None and (pick := ahead.pick()) is not None:
-                    ahead.run(*pick)
-                elif scaffold is not None and scaffold.pending:  # no horizon worth deciding ahead
-                    scaffold.run()
-                    rise.catch_up()
-                self.stats["bound_s"] += budget.now() - began
+                self._round(rise, seek, ahead, scaffold, background)
             rise.step(budget.child(0))  # what the bound search sent while the last part ran
         except KeyboardInterrupt:  # a second Ctrl-C, or a subscriber that raised it: keep what is held
             stopped = True
@@ -237,14 +212,50 @@ class _Anytime:
         finally:
             if rise is not None:
                 rise.close()
+        return self._end(stopped, seek)
+
+    def _round(self, rise, seek, ahead, scaffold, background: bool) -> None:
+        """One round of :meth:`run`: the bound search's part; then, without a schedule, the
+        search for one; with one, a window of the neighbourhood search, and when that has stalled,
+        a horizon decided ahead or a scaffold scenario."""
+        bracket, budget = self.bracket, self.budget
+        part = budget.child(0 if background else self.slice)
+        rise.step(part)
+        self.stats["bound_s"] += part.elapsed()
+        if bracket.best is None and not bracket.closed:
+            began = budget.now()
+            found = seek.step()
+            self.stats["seek_s"] = round(self.stats.get("seek_s", 0.0) + budget.now() - began, 3)
+            if found is not None:
+                self.start_from(found)
+            return
+        if bracket.closed:
+            return
+        part, makespan = budget.child(self.slice), bracket.best.makespan
+        self.windows[0].step(part)
+        if bracket.best.makespan == makespan:  # the search that shortened it last goes on
+            self.windows.reverse()
+        self.stats["search_s"] += part.elapsed()
+        if not self._stalled() or bracket.closed:
+            return
+        began = budget.now()
+        if ahead is not None and (pick := ahead.pick()) is not None:
+            ahead.run(*pick)
+        elif scaffold is not None and scaffold.pending:  # no horizon worth deciding ahead
+            scaffold.run()
+            rise.catch_up()
+        self.stats["bound_s"] += budget.now() - began
+
+    def _end(self, stopped: bool, seek) -> Result:
+        """The result once the loop of :meth:`run` has ended: how it ended, as a status."""
         if stopped:
             return self.result("interrupted")
         if seek.infeasible:
             self.stats["reason"] = EXHAUSTED
             return self.result("infeasible")
-        if bracket.best is None:
+        if self.bracket.best is None:
             return self.result("timeout")
-        return self.result("optimal" if bracket.closed else "feasible")
+        return self.result("optimal" if self.bracket.closed else "feasible")
 
     def _stalled(self) -> bool:
         """Whether the best schedule has not shortened for a tenth of the time limit (at least 5 s):
