@@ -115,6 +115,32 @@ def _active(active, m: int, name: str) -> list[int]:
     return list(range(m)) if active is None else sorted(set(active))
 
 
+class Stop(Exception):
+    """The loop ends without a schedule: ``reason`` (the result's ``stats.failure``) and its
+    ``status`` (``unsolved``, ``timeout``, ``error``)."""
+
+    def __init__(self, reason: str, status: str = "unsolved") -> None:
+        super().__init__(reason)
+        self.reason, self.status = reason, status
+
+
+def _checked(name: str, motion, epsilon: float, horizon: int, d_tr: int, priorities, active, m: int):
+    """The loop's options checked (OptionError naming the first wrong one): the initial
+    priorities ``Q`` and the robots that take jobs."""
+    if isinstance(motion, str) and motion not in MOTIONS:
+        raise OptionError(f"unknown motion planner '{motion}' (expected one of: {', '.join(MOTIONS)})")
+    if epsilon < 1:
+        raise OptionError(f"{name}: epsilon must be >= 1, got {epsilon}")
+    if horizon < 1:
+        raise OptionError(f"{name}: the horizon H must be >= 1, got {horizon}")
+    if d_tr < 0:
+        raise OptionError(f"{name}: d_tr must be >= 0, got {d_tr}")
+    Q = list(range(m)) if priorities is None else list(priorities)
+    if sorted(Q) != list(range(m)):
+        raise OptionError(f"{name}: priorities must order the robot ids 0..{m - 1}, got {priorities}")
+    return Q, _active(active, m, name)
+
+
 class Loop:
     """One run: the state :attr:`s`, the parts (:attr:`allocation`, :attr:`transfer` (None
     without load transfer), :attr:`manipulation`, :attr:`goals`, :attr:`motion`) and the
@@ -127,18 +153,7 @@ class Loop:
                  method: str | None = None, shift_priorities: bool = True) -> None:
         m = instance.num_robots
         name = method or (motion if isinstance(motion, str) else motion.name)
-        if isinstance(motion, str) and motion not in MOTIONS:
-            raise OptionError(f"unknown motion planner '{motion}' (expected one of: {', '.join(MOTIONS)})")
-        if epsilon < 1:
-            raise OptionError(f"{name}: epsilon must be >= 1, got {epsilon}")
-        if horizon < 1:
-            raise OptionError(f"{name}: the horizon H must be >= 1, got {horizon}")
-        if d_tr < 0:
-            raise OptionError(f"{name}: d_tr must be >= 0, got {d_tr}")
-        Q = list(range(m)) if priorities is None else list(priorities)
-        if sorted(Q) != list(range(m)):
-            raise OptionError(f"{name}: priorities must order the robot ids 0..{m - 1}, got {priorities}")
-        active = _active(active, m, name)
+        Q, active = _checked(name, motion, epsilon, horizon, d_tr, priorities, active, m)
         self.instance = instance
         self.budget = budget or Budget()
         self.progress = None  # the run's progress receiver: told the steps planned every PROGRESS_STEPS
@@ -217,20 +232,27 @@ class Loop:
         return {robot: action}
 
     def run(self, method: str):
-        s, stats, motion = self.s, self.stats, self.motion
-        seen: set = set()
+        """Step until the structure and the robots are at their goals (the paper's loop: jobs,
+        transfers, circles, manipulations, motion), or until a :class:`Stop`; the result."""
+        stats = self.stats
         step_times: list[float] = []
-
-        def stop(reason: str, status: str = "unsolved"):
-            stats["failure"] = reason
+        try:
+            if self.path_planning:
+                unreachable = np.flatnonzero(self._distances() >= UNREACHABLE).tolist()
+                if unreachable:
+                    stats["unreachable"] = unreachable
+                    raise Stop("unreachable")
+            self._steps(step_times)
+        except Stop as stop:
+            stats["failure"] = stop.reason
             timing(stats, step_times)
-            return to_result(self.instance, method, status, None, stats=stats)
+            return to_result(self.instance, method, stop.status, None, stats=stats)
+        timing(stats, step_times)
+        stats["final_priorities"] = list(self.s.Q)
+        return to_result(self.instance, method, "feasible", self.s.steps, stats=stats)
 
-        if self.path_planning:
-            unreachable = np.flatnonzero(self._distances() >= UNREACHABLE).tolist()
-            if unreachable:
-                stats["unreachable"] = unreachable
-                return stop("unreachable")
+    def _steps(self, step_times: list[float]) -> None:
+        seen: set = set()
         told = -1
         while not self.done():
             s = self.s
@@ -238,69 +260,79 @@ class Loop:
                 told = len(s.steps) // PROGRESS_STEPS
                 self.progress({"lower": None, "best": None, "elapsed": self.budget.elapsed(), "steps": len(s.steps)})
             if len(s.steps) >= self.max_steps:
-                return stop("step bound")
+                raise Stop("step bound")
             if self.budget.expired():
-                return stop(self.budget.why(), status="timeout")
+                raise Stop(self.budget.why(), "timeout")
             t0 = self.budget.now()
             for robot, k in self.allocation.decide(s):
                 s.assign(robot, k)
             if self.transfer is not None:
                 self._transfers(seen)
             key = s.key()
-            if key in seen and self.path_planning:  # going round in circles: the paper's rule
-                if not self.shift_priorities or stats["priority_shifts"] >= self.max_shifts:
-                    return stop("deadlock")
-                stuck = [i for i in s.Q if not self._at_goal(i)]
-                s.shift_up(stuck[-1])
-                stats["priority_shifts"] += 1
-                continue
-            if key in seen:  # going round in circles
-                if stats["circle_shifts"] >= self.max_shifts:
-                    if self.transfer is not None and self.transfer.can_backtrack():
-                        seen = self._backtrack()
-                        continue
-                    if self.goals.evict(s):  # idle robots leave the poses the others need
-                        stats["evictions"] += 1
-                        stats["circle_shifts"] = 0
-                        seen = set()
-                        motion.forget()
-                        continue
-                    return stop("deadlock")
-                busy = [i for i in s.Q if s.legs[i] or self.goals.of(s, i) is not None] or list(s.Q)
-                s.shift_up(busy[-1])
-                stats["priority_shifts"] += 1
-                stats["circle_shifts"] += 1
-                if motion.circle():
+            if key in seen:
+                seen, again = self._circling(s, seen)
+                if again:
                     continue
             seen.add(key)
-            fixed, intents = self.manipulation.decide(s)
-            goals = self.goals.all(s)
-            joint = motion.step(s, fixed, goals, intents, self.budget)
-            if joint is None and motion.drops and motion.failure != "timeout":
-                fixed = self._drop()  # no plan gets a carrying robot on: it puts its tile down
-                if fixed:
-                    joint = s.waits()
-                    for i, a in fixed.items():
-                        joint[i] = a
-                    motion.forget()
-            if joint is None and self.path_planning:
+            self._step(s, t0, step_times)
+
+    def _circling(self, s: LoopState, seen: set) -> tuple[set, bool]:
+        """The state was met before: the robots go round in circles. Shift a priority (the paper's
+        rule; in the loop, after the budget of shifts, back before the last load transfer, or
+        idle robots evicted), or :class:`Stop` with a deadlock. ``(seen, again)``: the states
+        seen from now on, and whether the step starts over (False: it is planned from here)."""
+        stats = self.stats
+        if self.path_planning:
+            if not self.shift_priorities or stats["priority_shifts"] >= self.max_shifts:
+                raise Stop("deadlock")
+            stuck = [i for i in s.Q if not self._at_goal(i)]
+            s.shift_up(stuck[-1])
+            stats["priority_shifts"] += 1
+            return seen, True
+        if stats["circle_shifts"] >= self.max_shifts:
+            if self.transfer is not None and self.transfer.can_backtrack():
+                return self._backtrack(), True
+            if self.goals.evict(s):  # idle robots leave the poses the others need
+                stats["evictions"] += 1
+                stats["circle_shifts"] = 0
+                self.motion.forget()
+                return set(), True
+            raise Stop("deadlock")
+        busy = [i for i in s.Q if s.legs[i] or self.goals.of(s, i) is not None] or list(s.Q)
+        s.shift_up(busy[-1])
+        stats["priority_shifts"] += 1
+        stats["circle_shifts"] += 1
+        return seen, self.motion.circle()
+
+    def _step(self, s: LoopState, t0: float, step_times: list[float]) -> None:
+        """Steps 3 and 4: the manipulations and the goals decided, the motion planned (or a
+        tile put down where no plan gets a carrying robot on), and the joint action applied."""
+        motion = self.motion
+        fixed, intents = self.manipulation.decide(s)
+        goals = self.goals.all(s)
+        joint = motion.step(s, fixed, goals, intents, self.budget)
+        if joint is None and motion.drops and motion.failure != "timeout":
+            fixed = self._drop()  # no plan gets a carrying robot on: it puts its tile down
+            if fixed:
+                joint = s.waits()
+                for i, a in fixed.items():
+                    joint[i] = a
+                motion.forget()
+        if joint is None:
+            status = "timeout" if motion.failure == "timeout" else "unsolved"
+            if self.path_planning:
                 step_times.append(self.budget.now() - t0)
-                return stop(self.budget.why(), "timeout") if motion.failure == "timeout" else stop(motion.failure)
-            if joint is None:
-                return stop(f"{motion.label} found no joint plan ({motion.failure})",
-                            status="timeout" if motion.failure == "timeout" else "unsolved")
-            step_times.append(self.budget.now() - t0)
-            nxt = apply(s.world, s.state, joint, step=len(s.steps) + 1)
-            if not isinstance(nxt, State):  # the planners respect the rules; this is a bug
-                return stop(f"internal: {nxt}", status="error")
-            progress = s.advance(joint, nxt, fixed)
-            if progress:
-                self.goals.evicted.clear()  # the work has moved on: evicted robots are idle again
-            motion.stepped(s, fixed, goals, progress)
-            stats["steps"] = len(s.steps)
-        timing(stats, step_times)
-        stats["final_priorities"] = list(self.s.Q)
-        return to_result(self.instance, method, "feasible", self.s.steps, stats=stats)
+                raise Stop(self.budget.why() if status == "timeout" else motion.failure, status)
+            raise Stop(f"{motion.label} found no joint plan ({motion.failure})", status)
+        step_times.append(self.budget.now() - t0)
+        nxt = apply(s.world, s.state, joint, step=len(s.steps) + 1)
+        if not isinstance(nxt, State):  # the planners respect the rules; this is a bug
+            raise Stop(f"internal: {nxt}", "error")
+        progress = s.advance(joint, nxt, fixed)
+        if progress:
+            self.goals.evicted.clear()  # the work has moved on: evicted robots are idle again
+        motion.stepped(s, fixed, goals, progress)
+        self.stats["steps"] = len(s.steps)
 
     def _at_goal(self, i: int) -> bool:
         """Robot ``i`` stands on its goal cell, or has none."""
