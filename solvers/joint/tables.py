@@ -103,37 +103,9 @@ def compile_tables(instance: Instance, cells: Cells, distances: bool = True) -> 
     incumbent); without, the bound is 1 off the goal cell and 0 on it (what the goal test reads)."""
     world = instance.world
     m, n = instance.num_robots, instance.width * instance.height
-    graphs: list = []
-    gid = np.zeros(m, dtype=np.int64)
-    for i, g in enumerate(world.graphs):
-        for k, h in enumerate(graphs):
-            if h is g:
-                gid[i] = k
-                break
-        else:
-            gid[i] = len(graphs)
-            graphs.append(g)
+    graphs, gid = _distinct_graphs(world.graphs)
     P = max([g.num_poses for g in graphs] + [1])
-    A = max([g.num_actions for g in graphs] + [1])
-    K = max([g.coll.shape[2] for g in graphs] + [1])
-    Kc = max([g.carry.shape[2] for g in graphs] + [1])
-    G = max(len(graphs), 1)
-    succ = np.full((G, P, A), -1, np.int32)
-    coll = np.full((G, P, A, K), -1, np.int32)
-    carry = np.full((G, P, A, Kc), -1, np.int32)
-    carry_ok = np.zeros((G, P, A), np.bool_)
-    need = np.zeros((G, P, A, 2), np.int32)
-    target = np.full((G, P, A), -1, np.int32)
-    kind = np.zeros((G, A), np.int8)
-    for k, g in enumerate(graphs):
-        p, a = g.num_poses, g.num_actions
-        succ[k, :p, :a] = g.succ
-        coll[k, :p, :a, :g.coll.shape[2]] = g.coll
-        carry[k, :p, :a, :g.carry.shape[2]] = g.carry
-        carry_ok[k, :p, :a] = g.carry_ok
-        need[k, :p, :a] = np.maximum(g.need, 0)  # read only where succ >= 0, where need is a cell
-        target[k, :p, :a] = g.target
-        kind[k, :a] = g.kind
+    succ, coll, carry, carry_ok, need, target, kind = _stacked(graphs, P)
 
     mask = cells.mask
     cell_of = np.flatnonzero(mask).astype(np.int64)
@@ -154,16 +126,7 @@ def compile_tables(instance: Instance, cells: Cells, distances: bool = True) -> 
     possible = instance.start.tiles | mask  # the cells that may hold a tile at some step
     check_budget(8 * m * P, lambda size: f"the joint search: {m} robots' distance tables on {P} poses need {size}",
                  OptionError)
-    dist = np.zeros((m, P), np.int32)
-    cache: dict = {}
-    for i, goal in enumerate(instance.goal_cells):
-        if goal >= 0:
-            key = (int(gid[i]), goal)
-            if key not in cache:
-                g = graphs[gid[i]]
-                cache[key] = _distances(g, goal, possible, P) if distances else \
-                    np.pad((g.feet[:, 0] != goal).astype(np.int32), (0, P - g.num_poses), constant_values=1)
-            dist[i] = cache[key]
+    dist = _goal_distances(instance, graphs, gid, possible, P, distances)
     groups: dict = {}
     for i, goal in enumerate(instance.goal_cells):
         if goal < 0:
@@ -175,11 +138,70 @@ def compile_tables(instance: Instance, cells: Cells, distances: bool = True) -> 
     W = -(-n // 64) if not classic and n <= MASK_CELLS else 0
     masks = _masks(coll, carry, W) if W else np.zeros((1, 1, 1, 2, 1), np.int64)
     reach = fetch = np.zeros((0, 1, 1), np.int32)
-    if distances and 0 < len(cell_of) <= TRANSPORT_CELLS and len(cell_of) ** 2 * G * P <= TRANSPORT_SIZE:
+    size = len(cell_of) ** 2 * max(len(graphs), 1) * P  # the transport tables' entries
+    if distances and 0 < len(cell_of) <= TRANSPORT_CELLS and size <= TRANSPORT_SIZE:
         reach, fetch = _transport(graphs, cell_of, possible, P)
     return Tables(m, rbits, rpw, nR, nT, instance.width, instance.height, classic, gid, succ, coll, carry, carry_ok,
                   need, target, kind, bit_of, cell_of, fixed, fixed_count, anchor, goal_words, dist, sym_start,
                   sym_idx, masks, W, reach, fetch)
+
+
+def _distinct_graphs(robot_graphs) -> tuple[list, np.ndarray]:
+    """The distinct pose graphs (robots of one moveset share one) and each robot's index among them."""
+    graphs: list = []
+    gid = np.zeros(len(robot_graphs), dtype=np.int64)
+    for i, g in enumerate(robot_graphs):
+        for k, h in enumerate(graphs):
+            if h is g:
+                gid[i] = k
+                break
+        else:
+            gid[i] = len(graphs)
+            graphs.append(g)
+    return graphs, gid
+
+
+def _stacked(graphs: list, P: int) -> tuple:
+    """The graphs' tables stacked into arrays of one shape (padded with -1, False or 0): the
+    successors, collision cells, carried cells, carry flags, needed cells, targets and kinds."""
+    A = max([g.num_actions for g in graphs] + [1])
+    K = max([g.coll.shape[2] for g in graphs] + [1])
+    Kc = max([g.carry.shape[2] for g in graphs] + [1])
+    G = max(len(graphs), 1)
+    succ = np.full((G, P, A), -1, np.int32)
+    coll = np.full((G, P, A, K), -1, np.int32)
+    carry = np.full((G, P, A, Kc), -1, np.int32)
+    carry_ok = np.zeros((G, P, A), np.bool_)
+    need = np.zeros((G, P, A, 2), np.int32)
+    target = np.full((G, P, A), -1, np.int32)
+    kind = np.zeros((G, A), np.int8)
+    for k, g in enumerate(graphs):
+        p, a = g.num_poses, g.num_actions
+        succ[k, :p, :a] = g.succ
+        coll[k, :p, :a, :g.coll.shape[2]] = g.coll
+        carry[k, :p, :a, :g.carry.shape[2]] = g.carry
+        carry_ok[k, :p, :a] = g.carry_ok
+        need[k, :p, :a] = np.maximum(g.need, 0)  # read only where succ >= 0, where need is a cell
+        target[k, :p, :a] = g.target
+        kind[k, :a] = g.kind
+    return succ, coll, carry, carry_ok, need, target, kind
+
+
+def _goal_distances(instance: Instance, graphs: list, gid: np.ndarray, possible: np.ndarray, P: int,
+                    distances: bool) -> np.ndarray:
+    """``dist[i, p]``: robot ``i``'s bound from pose ``p`` (:func:`compile_tables`), 0 for a robot
+    without a goal cell; computed once per graph and goal."""
+    dist = np.zeros((instance.num_robots, P), np.int32)
+    cache: dict = {}
+    for i, goal in enumerate(instance.goal_cells):
+        if goal >= 0:
+            key = (int(gid[i]), goal)
+            if key not in cache:
+                g = graphs[gid[i]]
+                cache[key] = _distances(g, goal, possible, P) if distances else \
+                    np.pad((g.feet[:, 0] != goal).astype(np.int32), (0, P - g.num_poses), constant_values=1)
+            dist[i] = cache[key]
+    return dist
 
 
 def _transport(graphs, cell_of: np.ndarray, possible: np.ndarray, P: int) -> tuple[np.ndarray, np.ndarray]:
