@@ -199,42 +199,9 @@ class _Builder:
     # ---- variables ---------------------------------------------------------------------------
 
     def _variables(self) -> None:
+        self._tile_variables()
+        self._carry_variables()
         m, T, inst = self.m, self.T, self.inst
-        goal, start = inst.goal_tiles, inst.start.tiles
-        window = change_window(inst, self.R, T) if self.opt.prune_cells else {}
-        for c in self.cells:
-            # a cell never in reach keeps its start value; if the goal differs, the clauses of
-            # step T contradict and this horizon is infeasible
-            lo, hi = window.get(c, (T + 1, T + 1)) if self.opt.prune_cells else (1, T)
-            for t in range(T + 1):
-                if t == T:
-                    m.tile[(t, c)] = self.const(bool(goal[c]))
-                elif t < lo:
-                    m.tile[(t, c)] = self.const(bool(start[c]))
-                elif t >= hi:
-                    m.tile[(t, c)] = self.const(bool(goal[c]))
-                elif self.timed is not None and not self.timed.tiles[t, c]:
-                    m.tile[(t, c)] = self.const(False)
-                elif self.opt.kept and start[c] == goal[c]:
-                    m.tile[(t, c)] = self.const(bool(goal[c]))
-                else:
-                    m.tile[(t, c)] = m.var(("tile", t, c))
-            if self.opt.single_carry and start[c] != goal[c]:
-                # the cell changes once, from its start value to its goal value
-                for t in range(1, T + 1):
-                    before, after = m.tile[(t - 1, c)], m.tile[(t, c)]
-                    m.clauses.append([-before, after] if goal[c] else [before, -after])
-        self.carry = {}
-        for i in range(inst.num_robots):
-            for t in range(T + 1):
-                if t == 0:
-                    self.carry[(i, t)] = self.const(self.state.carrying[i])
-                elif t == T and (self.end is None or len({self.end.carrying[j] for j in self.roles[i]}) == 1):
-                    self.carry[(i, t)] = self.const(self.end is not None and bool(self.end.carrying[i]))
-                elif self.timed is not None and not self.timed.carry[i, t]:
-                    self.carry[(i, t)] = self.const(False)
-                else:
-                    self.carry[(i, t)] = m.var(("carry", i, t))
         self.x = {}
         for i in range(inst.num_robots):
             self.x[(i, 0, self.state.poses[i])] = m.true
@@ -246,6 +213,55 @@ class _Builder:
                 # one pose at a time: implied by the actions (one per step, each from one pose to
                 # one), and said outright it lets the solver conclude sooner (docs/decisions.md)
                 m.exactly_one.append(poses)
+
+    def _tile_variables(self) -> None:
+        """A tile's presence per step and cell: a constant where the pruning or the class fixes
+        it, a variable otherwise; with ``single_carry``, a changing cell changes once."""
+        m, T, inst = self.m, self.T, self.inst
+        goal, start = inst.goal_tiles, inst.start.tiles
+        window = change_window(inst, self.R, T) if self.opt.prune_cells else {}
+        for c in self.cells:
+            # a cell never in reach keeps its start value; if the goal differs, the clauses of
+            # step T contradict and this horizon is infeasible
+            lo, hi = window.get(c, (T + 1, T + 1)) if self.opt.prune_cells else (1, T)
+            for t in range(T + 1):
+                m.tile[(t, c)] = self._tile_at(t, c, lo, hi)
+            if self.opt.single_carry and start[c] != goal[c]:
+                # the cell changes once, from its start value to its goal value
+                for t in range(1, T + 1):
+                    before, after = m.tile[(t - 1, c)], m.tile[(t, c)]
+                    m.clauses.append([-before, after] if goal[c] else [before, -after])
+
+    def _tile_at(self, t: int, c: int, lo: int, hi: int) -> int:
+        """Cell ``c``'s tile at step ``t``, which may change only in steps ``lo .. hi - 1``."""
+        goal, start = self.inst.goal_tiles, self.inst.start.tiles
+        if t == self.T:
+            return self.const(bool(goal[c]))
+        if t < lo:
+            return self.const(bool(start[c]))
+        if t >= hi:
+            return self.const(bool(goal[c]))
+        if self.timed is not None and not self.timed.tiles[t, c]:
+            return self.const(False)
+        if self.opt.kept and start[c] == goal[c]:
+            return self.const(bool(goal[c]))
+        return self.m.var(("tile", t, c))
+
+    def _carry_variables(self) -> None:
+        """Whether each robot carries at each step: its start's, its end's where that is known,
+        false where the timed reach says so, a variable otherwise."""
+        m, T = self.m, self.T
+        self.carry = {}
+        for i in range(self.inst.num_robots):
+            for t in range(T + 1):
+                if t == 0:
+                    self.carry[(i, t)] = self.const(self.state.carrying[i])
+                elif t == T and (self.end is None or len({self.end.carrying[j] for j in self.roles[i]}) == 1):
+                    self.carry[(i, t)] = self.const(self.end is not None and bool(self.end.carrying[i]))
+                elif self.timed is not None and not self.timed.carry[i, t]:
+                    self.carry[(i, t)] = self.const(False)
+                else:
+                    self.carry[(i, t)] = m.var(("carry", i, t))
 
     def tile(self, t: int, c: int) -> int:
         return self.m.tile.get((t, c), -self.m.true)
