@@ -337,3 +337,17 @@ def test_gap_csv_never_reads_a_bare_optimal_above_the_proved_optimum(cli, capsys
     proved = min(int(r["makespan"]) for r in rows if r["status"] == "optimal")
     assert all(int(r["makespan"]) == proved for r in rows if r["status"] == "optimal")
     assert {r["status"] for r in rows if r["method"] == "mstar"} == {"optimal-sum-of-costs-walking-only"}
+
+
+@pytest.mark.parametrize("argv, missing, extra", [
+    (["run", "lt-4", "lt-4.schedule"], "paho", "execute"),
+    (["sweep", "run", "small", "--scheduler", "tcp://127.0.0.1:1"], "distributed", "sweep")])
+def test_a_command_without_its_optional_dependency_says_which_extra_installs_it(tmp_path, argv, missing, extra):
+    # the sweep's Dask back end and the execution layer are extras (pyproject.toml): without them
+    # the command says what to install, exits 2 and writes nothing
+    code = (f"import sys; sys.modules[{missing!r}] = None\n"
+            f"from bille.tools.cli import main\nmain({argv!r})")
+    done = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2 and "Traceback" not in done.stderr
+    assert f"pip install 'bille[{extra}]'" in done.stderr and len(done.stderr.strip().splitlines()) == 1
+    assert list(tmp_path.iterdir()) == []

@@ -77,6 +77,10 @@ ELSEWHERE = {
 }
 
 
+# the libraries of the optional dependencies (pyproject.toml's extras) and the extra that installs them
+EXTRAS = {"distributed": "sweep", "dask": "sweep", "paho": "execute", "amqtt": "execute", "jsonschema": "execute"}
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``bille`` console script."""
     try:
@@ -99,6 +103,13 @@ def main(argv: list[str] | None = None) -> int:
         code = EXIT_USAGE
     except BrokenPipeError:
         code = EXIT_OK
+    except ModuleNotFoundError as exc:
+        extra = EXTRAS.get((exc.name or "").partition(".")[0])
+        if extra is None:
+            raise
+        click.echo(f"bille: error: this command needs {exc.name.partition('.')[0]}, part of bille's optional "
+                   f"'{extra}' dependencies: pip install 'bille[{extra}]'", err=True)
+        code = EXIT_USAGE
     sys.exit(code if isinstance(code, int) else EXIT_OK)
 
 

@@ -80,6 +80,8 @@ def run_spec(spec, out, *, jobs=None, scheduler=None, client=None, quiet=False):
     from .engine import run_dask, run_local
     from .results import Store, certify
 
+    if scheduler:  # the optional Dask client is needed before anything is written
+        import distributed  # noqa: F401
     store = Store(out)
     todo = [r for r in spec.runs if r.key not in store.keys]
     skipped = len(spec.runs) - len(todo)
