@@ -12,7 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bille.heuristics import lacam, lacam_states, temporal_astar
+from bille.heuristics import lacam, temporal_astar
+from bille.heuristics.lacam import states as lacam_states
 
 from bille.heuristics.loop import reconfigure
 from bille.instances import Instance, OptionError
@@ -158,7 +159,7 @@ def to_cap(instance: Instance, given: Schedule | None, budget: Budget,
 
 def complete_search(instance: Instance, budget: Budget) -> tuple[Incumbent | None, bool]:
     """A first schedule from the complete planner, for when the heuristics found none: LaCAM*
-    over whole states (:mod:`bille.heuristics.lacam_states`), after LaCAM* on the fixed
+    over whole states (:mod:`bille.heuristics.lacam.states`), after LaCAM* on the fixed
     structure on path planning (a walking schedule, found faster where one exists). Returns the
     validated schedule or None, and whether the search proved that no schedule exists (it
     exhausted the space of whole states; a walking search that fails proves nothing, since

@@ -60,7 +60,7 @@ def plan_lacam(instance: Instance, options=None, run: Run | None = None) -> Resu
     reconfiguration loop with LaCAM* as its motion layer (``load_transfer``, ``d_tr``,
     ``max_steps``, ``active`` as for the loop), and where the loop gives up, or runs out of its
     share of the time limit (:data:`LOOP_SHARE`), LaCAM* over whole states (every robot taking
-    jobs; :mod:`bille.heuristics.lacam_states`) with the time left: complete, so the method
+    jobs; :mod:`bille.heuristics.lacam.states`) with the time left: complete, so the method
     finds a schedule whenever one exists (time and memory permitting) and proves ``infeasible``
     when its space is exhausted. ``objective`` is for path planning; ``improve``, ``max_nodes``
     and ``seed`` for the searches over configurations."""
@@ -70,7 +70,7 @@ def plan_lacam(instance: Instance, options=None, run: Run | None = None) -> Resu
     if not instance.is_reconfiguration:
         o.check_instance(instance)
         return lacam.plan(instance, o, run)
-    from bille.heuristics import lacam_states  # (and scipy's graph routines) for an instance that moves tiles
+    from bille.heuristics.lacam import states as lacam_states  # (and scipy's graph routines) for an instance that moves tiles
     from bille.heuristics.loop import reconfigure
     if instance.collisions == "classic":
         raise OptionError(f"lacam: instance '{instance.name}' moves tiles under classic collisions; "

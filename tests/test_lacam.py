@@ -7,7 +7,7 @@ import pytest
 
 from bille.instances import InstanceError, load_instance
 from bille.instances.bundled import bundled_path
-from bille.heuristics import lacam_states
+from bille.heuristics.lacam import states as lacam_states
 from bille.instances.generators.random import crowded
 from bille.instances.run import Run
 from bille.solvers import solve, validate
@@ -222,8 +222,8 @@ def _suo(inst, margin=10):
     from random import Random as R
 
     from bille.heuristics.joint import JointProblem
-    from bille.heuristics.pibt import Classic
-    from bille.heuristics.scatter import CollisionTable, scatter
+    from bille.heuristics.lacam.pibt import Classic
+    from bille.heuristics.lacam.scatter import CollisionTable, scatter
 
     problem = JointProblem.of(inst, "lacam")
     nbrs = Classic(problem, R(0)).nbrs
@@ -261,8 +261,8 @@ def test_the_compiled_suo_table_gives_the_python_tables_paths(agents, seed):
     # the same algorithm twice (heuristics/scatter_compiled.py compiles it): the same paths, on a
     # benchmark map crowded enough that the rounds move many robots off their shortest paths
     from bille.heuristics.joint import JointProblem
-    from bille.heuristics.pibt import Classic
-    from bille.heuristics.scatter import scatter
+    from bille.heuristics.lacam.pibt import Classic
+    from bille.heuristics.lacam.scatter import scatter
     from bille.instances.generators.movingai import from_movingai
     from bille.tools.bench.maps import shipped_maps
 
@@ -280,7 +280,7 @@ def test_the_compiled_suo_table_gives_the_python_tables_paths(agents, seed):
 
 
 def test_suo_makes_lacam_spread_robots_on_a_benchmark_map():
-    from bille.heuristics import lacam
+    from bille.heuristics.lacam import search as lacam
     from bille.instances.generators.movingai import from_movingai
     from bille.tools.bench.maps import shipped_maps
     from bille.tools.bench.mapf import sum_of_costs
@@ -302,7 +302,7 @@ def test_suo_makes_lacam_spread_robots_on_a_benchmark_map():
 def test_refinement_keeps_schedules_valid_and_never_costlier():
     from random import Random as R
 
-    from bille.heuristics.refine import Paths, refine_once
+    from bille.heuristics.lacam.refine import Paths, refine_once
     from bille.instances.generators.movingai import from_movingai
     from bille.tools.bench.maps import shipped_maps
     from bille.tools.bench.mapf import sum_of_costs
@@ -314,7 +314,7 @@ def test_refinement_keeps_schedules_valid_and_never_costlier():
     assert gains == sorted(gains, reverse=True) and result.stats.get("refined", 0) >= 0
     # the refinement alone, forty neighbourhoods on the first schedule: paths stay conflict-free
     from bille.heuristics.joint import JointProblem
-    from bille.heuristics.pibt import Classic
+    from bille.heuristics.lacam.pibt import Classic
 
     first = checked(inst, objective="sum-of-loss", improve=0.0)
     problem = JointProblem.of(inst, "lacam")

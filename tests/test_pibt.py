@@ -5,7 +5,7 @@ from random import Random
 import pytest
 
 from bille.heuristics.joint import JointProblem
-from bille.heuristics.pibt import Bille, Classic, next_configuration, next_priorities
+from bille.heuristics.lacam.pibt import Bille, Classic, next_configuration, next_priorities
 from helpers import make
 from test_lacam import TINY
 

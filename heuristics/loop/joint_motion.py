@@ -5,7 +5,7 @@ distance tables), planned again when the structure, the goals or the poses leave
 that manipulate make their pick or place where the plan has them wait and their cells are free.
 M* keeps a manipulating robot where it is; LaCAM* lets it wait one step, then is free.
 
-LaCAM* takes free steps of its configuration generator (:mod:`.pibt`) and plans only when the
+LaCAM* takes free steps of its configuration generator (:mod:`..lacam.pibt`) and plans only when the
 loop goes round in circles, until the next pick or place; when no joint plan brings every robot
 to its goal within :data:`LACAM_NODES` configurations, it plans for one robot at a time, and when
 none is found at all, a carrying robot may put its tile down for a while (``drops``).
@@ -18,7 +18,8 @@ from bille.instances import Instance
 from bille.instances.run import Budget
 from bille.instances.walking import UNREACHABLE
 
-from .. import lacam, mstar, pibt
+from .. import lacam, mstar
+from ..lacam import pibt
 from ..joint import JointProblem
 from .loopstate import LoopState
 

@@ -61,7 +61,7 @@ def mapf_rows(folder: Path, maps=MAPS, agents=AGENTS, time_limit: float = 60.0, 
     from .peers import run_lacam3, run_pypibt
 
     if peers and maps:  # the peers' times leave out their start: bille's leave out its imports
-        from bille.heuristics.scatter_compiled import warm_up
+        from bille.heuristics.lacam.scatter_compiled import warm_up
 
         warm = from_movingai(folder / f"{maps[0]}.map", folder / f"{maps[0]}{SCENARIO}", agents=2)
         solve(warm, "lacam", objective="sum-of-loss", time_limit=time_limit, improve=0.0)

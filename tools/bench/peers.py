@@ -142,7 +142,7 @@ LARGEST_S = 30.0  # "solved" for the largest agent count: a first schedule withi
 
 def peers_table(rows: list[dict], names: list[str]) -> list[str]:
     """Per map and agent count: bille's time, sum of costs and the share of its first schedule's
-    time spent on the SUO paths (:mod:`bille.heuristics.scatter`), and per peer the ratios bille /
+    time spent on the SUO paths (:mod:`bille.heuristics.lacam.scatter`), and per peer the ratios bille /
     peer of time and of sum of costs (below 1: bille faster, or cheaper); then per map the largest
     agent count each solved within :data:`LARGEST_S`, and the geometric means of the ratios."""
     from math import exp, log

@@ -131,7 +131,7 @@ def side_by_side(folder: Path, rows, peers: dict[str, Path], seconds: float, kin
             if not warmed:  # the peers' times leave out their start: bille's its imports and compiled code
                 mine(from_movingai(map_file, scen, agents=2), seconds)
                 if kind == "first":  # the SUO step's compiled table, loaded only on larger problems
-                    from bille.heuristics.scatter_compiled import warm_up
+                    from bille.heuristics.lacam.scatter_compiled import warm_up
 
                     warm_up()
                 warmed = True

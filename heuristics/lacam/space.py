@@ -1,14 +1,14 @@
 """LaCAM*'s search space on a fixed structure: the configurations of a :class:`JointProblem` (one
 pose per robot), their generator (:mod:`.pibt`), the step cost and admissible estimate of the
 objective, and under classic collisions the SUO paths (:mod:`.scatter`) and their refinement
-(:mod:`.refine`). The search itself is :func:`.lacam.search`."""
+(:mod:`.refine`). The search itself is :func:`.search.search`."""
 from __future__ import annotations
 
 import random
 
 from bille.instances.run import Budget
 
-from .joint import JointProblem
+from ..joint import JointProblem
 from .pibt import Bille, Classic
 from .refine import Paths, refine_once
 from .scatter import scatter

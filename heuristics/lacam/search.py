@@ -35,9 +35,9 @@ from bille.instances import Instance
 from bille.instances.options import option, refuse
 from bille.instances.run import Budget, Run
 
-from .joint import NO_WALK, JointProblem, to_result
-from .lacam_space import PoseSpace
-from .loop.loop_options import LoopOptions
+from ..joint import NO_WALK, JointProblem, to_result
+from .space import PoseSpace
+from ..loop.loop_options import LoopOptions
 from .pibt import next_priorities
 
 OBJECTIVES = ("makespan", "sum-of-loss")
@@ -140,7 +140,7 @@ def search(space, rng: random.Random, *, budget: Budget | None = None, improve: 
            max_nodes: int = 2_000_000, stats: dict | None = None,
            start: float | None = None, progress=None) -> tuple[str, list | None, dict]:
     """LaCAM* over any search ``space`` (:class:`PoseSpace`, or whole states in
-    :mod:`.lacam_states`): ``(status, joint actions or None, stats)`` with status ``optimal``
+    :mod:`.states`): ``(status, joint actions or None, stats)`` with status ``optimal``
     (the improvement exhausted the space), ``feasible``, ``timeout``, ``unsolved`` (node cap or
     an unreachable goal; ``stats["failure"]``) or ``exhausted`` (no goal in the whole space:
     the caller says what that proves). ``budget`` None: no limit; ``start``: the budget's time

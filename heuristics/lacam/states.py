@@ -40,8 +40,8 @@ from bille.instances.run import Run
 from bille.instances.successors import candidate_actions, collision_cells
 from bille.instances.walking import UNREACHABLE, walk_for
 
-from .joint import to_result
-from .lacam import search
+from ..joint import to_result
+from .search import search
 
 RETRIES = 3  # rejected joint actions repaired (a robot's choice turned into a wait) per constraint
 ROBOT_BYTES = 3_000  # stored per state and robot (node, key, candidate lists): measured 2.7 kB
