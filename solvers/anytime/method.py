@@ -98,7 +98,9 @@ class AnytimeOptions(MethodOptions):
     with interchangeable robots (one moveset, no goal cell) in one another's end states, the
     rest of the schedule permuted to match. ``incumbent``: a schedule to start from instead of
     the heuristics' (must be valid). ``keep_class``: the exact joint search among the schedules
-    that keep the structure after the first schedule (:meth:`_Anytime._keep_class`)."""
+    that keep the structure after the first schedule (:meth:`_Anytime._keep_class`); ``ladder``:
+    then, in the rest of that share, the same search over that class widened cell by cell below
+    the best schedule (:mod:`.ladder`; ``stats.ladder`` says what each rung proved)."""
 
     METHOD = "anytime"
     window: int = option(8, at_least=2, help="first window length of the neighbourhood search, in steps")
@@ -115,6 +117,7 @@ class AnytimeOptions(MethodOptions):
                                         help="a valid schedule to start from instead of the heuristics' (--incumbent "
                                              "FILE)")
     keep_class: bool = option(True, help="first decide the class that keeps the structure by the exact joint search")
+    ladder: bool = option(True, help="then widen that class cell by cell below the best schedule, in the same time")
 
 
 def plan(instance: Instance, options: AnytimeOptions | None = None, run: Run | None = None, *,
@@ -137,7 +140,7 @@ def plan(instance: Instance, options: AnytimeOptions | None = None, run: Run | N
         if tell is not None:
             subscribers.append(tell)
     search = _Anytime(instance, bracket, budget, o.window, o.slice, o.parallel, o.solver, o.bound_solver, o.swap,
-                      report, o.keep_class)
+                      report, o.keep_class, o.ladder)
     return search.run(bounds, o.incumbent)
 
 
@@ -161,8 +164,9 @@ class _Anytime:
     """One run: the bracket, the parts that narrow it, and the statistics."""
 
     def __init__(self, instance, bracket, budget: Budget, window, slice_s, parallel, solver, bound_solver, swap,
-                 report, keep_class: bool = True) -> None:
+                 report, keep_class: bool = True, ladder: bool = True) -> None:
         self.instance, self.bracket, self.slice, self.keep_class = instance, bracket, slice_s, keep_class
+        self.ladder = ladder
         self.parallel, self.bound_solver, self.report = parallel, bound_solver, report
         self.budget, self.total = budget, budget.left()  # the run's, and its seconds (inf: no limit)
         self.cut: list = []  # the first schedule's runs that ran out of their share
@@ -298,8 +302,8 @@ class _Anytime:
         ``cells=keep``) for up to :data:`CLASS_SHARE` of the time limit: on the load-transfer maps it
         decides that class in seconds, its optimum is offered as a schedule, and the class's
         optimum (or the bound it reached) goes to ``stats.class_optima`` (``stats.class_search``
-        says how it ended). The class's optimum is no bound on every schedule: the bracket's lower
-        bound is left as it is."""
+        says how it ended); the rest of the share climbs the ladder (:mod:`.ladder`). The class's
+        optimum is no bound on every schedule: the bracket's lower bound is left as it is."""
         inst = self.instance
         if not self.keep_class or not inst.is_reconfiguration or self.budget.expired():
             return
@@ -307,8 +311,8 @@ class _Anytime:
         from ..bfs import plan as bfs
 
         began = self.budget.now()
-        part = self.budget.child(max(1.0, CLASS_SHARE * self.total))
-        got = bfs(inst, BfsOptions(cells="keep", max_states=CLASS_STATES), Run(part))
+        share = self.budget.child(max(1.0, CLASS_SHARE * self.total))
+        got = bfs(inst, BfsOptions(cells="keep", max_states=CLASS_STATES), Run(share.child()))
         lower = got.stats["class"]["lower_bound"]
         self.stats["class_search"] = {"cells": "keep", "status": got.status, "lower_bound": lower,
                                       "states": got.stats.get("states"), "s": round(self.budget.now() - began, 3)}
@@ -320,6 +324,15 @@ class _Anytime:
                 self.start_from(found)
             elif found is not None:
                 self.bracket.offer(found)
+        if self.ladder and got.status == "optimal" and self.bracket.best is not None:
+            from .ladder import climb
+
+            def offer(schedule: Schedule) -> None:
+                found = from_schedule(inst, schedule, "bfs (ladder)")
+                if found is not None:
+                    self.bracket.offer(found)
+
+            self.stats["ladder"] = climb(inst, lambda: self.bracket.best, share, offer, CLASS_STATES)
 
     def start_from(self, found: Incumbent) -> None:
         """``found`` is the first schedule: ``stats.first`` names it."""

@@ -1,0 +1,61 @@
+"""The widening ladder of anytime solving (solvers/anytime/ladder.py): every rung's claim checked
+against the same class searched without an incumbent (no pruning), on tiny instances."""
+import pytest
+
+from bille.instances.grid import articulation_points
+from bille.instances.run import Budget
+from bille.solvers import solve
+from bille.solvers.anytime.ladder import RUNG, candidates, climb
+from bille.solvers.incumbent import from_schedule
+
+from tinyworlds import bridge_instance, tiny_instances
+
+TINY = [inst for inst in map(bridge_instance, range(30)) if inst is not None][:8] + tiny_instances(6)
+
+
+@pytest.mark.parametrize("inst", TINY, ids=lambda inst: inst.name)
+def test_the_candidates_can_be_lifted_and_set_back(inst):
+    start, goal = inst.start.tiles, inst.goal_tiles
+    cut = articulation_points(start, inst.width, inst.height)
+    cells = candidates(inst)
+    assert len(set(cells)) == len(cells)
+    for x, y in cells:
+        c = y * inst.width + x
+        assert start[c] and goal[c] and not cut[c]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("inst", TINY, ids=lambda inst: inst.name)
+def test_every_rung_claims_its_class_optimum(inst):
+    keep = solve(inst, "bfs", cells="keep", time_limit=60)
+    if keep.status != "optimal":
+        pytest.skip("no schedule keeps the structure")
+    best = [from_schedule(inst, keep.schedule, "keep")]
+    offered = []
+
+    def offer(schedule):
+        offered.append(schedule)
+        best.append(from_schedule(inst, schedule, "ladder"))
+
+    rows = climb(inst, lambda: best[-1], Budget(60), offer, 2_000_000)
+    assert len(rows) == -(-len(candidates(inst)) // RUNG)  # every rung decided on these
+    for row in rows:
+        plain = solve(inst, "bfs", cells="keep", add_cells=row["add_cells"], time_limit=60)
+        assert plain.status == "optimal"
+        claimed = row.get("optimum", row.get("lower_bound"))
+        assert claimed == plain.metrics.makespan, row  # the class's optimum, found below the incumbent
+    for schedule in offered:  # a shorter schedule offered is valid, and shorter than keep's optimum
+        checked = solve(inst, "bfs", cells="keep", time_limit=60)
+        assert from_schedule(inst, schedule, "x").makespan < checked.metrics.makespan
+
+
+@pytest.mark.slow
+def test_anytime_climbs_the_ladder_and_keeps_what_it_finds():
+    inst = bridge_instance(0)  # keep-structure optimum 8, the widened classes 7 then 6
+    result = solve(inst, "anytime", time_limit=30, parallel=False)
+    rows = result.stats["ladder"]
+    assert rows and all("optimum" in r or "lower_bound" in r for r in rows)
+    best = min(r.get("optimum", 1 << 30) for r in rows)
+    assert result.metrics.makespan <= best <= 6
+    off = solve(inst, "anytime", time_limit=30, parallel=False, ladder=False)
+    assert "ladder" not in off.stats
