@@ -68,7 +68,7 @@ class Options:
 
     ``no_scaffold`` restricts the schedules to those that never have a tile on a cell empty both
     at the start and in the goal: nothing is set down, even for a while, where neither has a
-    tile (the class ``no-scaffold`` of :mod:`bille.solvers.classes`). Those cells are constants:
+    tile (the class ``no-scaffold`` of :mod:`bille.solvers.bounds.classes`). Those cells are constants:
     empty at every step.
     ``keep_structure`` restricts the schedules to those that pick and place only on the cells
     where the start and the goal differ: a tile of both stays where it is, a cell empty in both

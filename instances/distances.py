@@ -8,7 +8,7 @@ pose unchanged, so the number of steps between two poses of any schedule is at l
 distance here. Bounds (``bille.solvers.bounds``) and the encodings' pruning read these tables.
 
 Within a class of schedules that never has a tile on some cells (``ground``: the cells that may
-ever hold one, :mod:`bille.solvers.classes`), a robot's feet stand only on ground cells (rule 4),
+ever hold one, :mod:`bille.solvers.bounds.classes`), a robot's feet stand only on ground cells (rule 4),
 so its steps are those of the relaxed graph whose poses have both feet on the ground: the
 distances of that graph bound every schedule of the class.
 """

@@ -175,7 +175,7 @@ def _static_bound(instance: Instance, budget: Budget, progress):
     instance infeasible, or when the time is up), and the seconds they took; ``progress`` is
     told the static bound (with the seconds since the run began)."""
     from .bounds import lower_bound
-    from .classes import applies, class_bounds
+    from .bounds.classes import applies, class_bounds
 
     began = budget.now()
     bounds = lower_bound(instance, budget=budget)
@@ -192,7 +192,7 @@ def _raised(classes: dict | None, result: Result) -> dict | None:
     exists."""
     if classes is None or result.status == "infeasible":
         return None
-    from .classes import RESTRICTIONS, ClassBound, nested
+    from .bounds.classes import RESTRICTIONS, ClassBound, nested
 
     out = {key: c if c.empty else ClassBound(key, max(c.lower, result.lower_bound or 0)) for key, c in classes.items()}
     for key, value in {**result.stats.get("class_lower_bounds", {}), **result.stats.get("class_optima", {})}.items():
@@ -230,7 +230,7 @@ def _checked(instance: Instance, method: str, result: Result, bounds, bound_s: f
         if report.valid:
             fields["metrics"] = report.metrics
             if classes is not None:
-                from .classes import classes_of
+                from .bounds.classes import classes_of
 
                 fields["stats"]["classes"] = classes_of(instance, result.schedule)
             _contradiction(fields, result, bounds, classes)

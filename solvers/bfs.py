@@ -95,7 +95,7 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
     below the incumbent or at all, or a cap reached); ``timeout``; ``interrupted``. The bound a
     stopped search proved is the result's ``lower_bound`` for ``all``, and ``stats.class.lower_bound``
     for a class (``stats.restricted_lower_bound`` too, where the class is one of
-    :mod:`bille.solvers.classes`)."""
+    :mod:`bille.solvers.bounds.classes`)."""
     options = options or Options()
     run = run or Run()
     if options.engine == "python" or (options.engine == "auto" and options.plain and _tiny(instance)):
@@ -192,7 +192,7 @@ def _result(instance: Instance, cells: Cells, out, upper, incumbent, options: Op
 
 def _member(instance: Instance, cells: Cells, ids) -> bool:
     """Whether a valid schedule changes no cell outside the class."""
-    from .classes import tiles_over_time
+    from .bounds.classes import tiles_over_time
 
     tiles = tiles_over_time(instance, ids)
     start = instance.start.tiles

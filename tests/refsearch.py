@@ -96,7 +96,7 @@ def walking_options(instance, state) -> list[list[int]]:
 def class_optimum(instance, rule: str, max_states: int = 5_000):
     """Brute-force minimum makespan over the schedules of one class (``no-scaffold``,
     ``keep-structure``, ``single-carry``; their definitions written again here from the
-    tiles' configurations, independently of bille.solvers.classes): a breadth-first search over
+    tiles' configurations, independently of bille.solvers.bounds.classes): a breadth-first search over
     (state, cells changed so far) that never enters a configuration outside the class. Returns
     ``(makespan, action ids [m, L])``, ``(None, None)`` when the class has no schedule, or
     raises RuntimeError beyond ``max_states``."""

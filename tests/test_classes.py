@@ -13,7 +13,7 @@ from bille.instances.schedule import Schedule
 from bille.instances.bundled import bundled_path
 from bille.solvers import load_schedule, solve, validate
 from bille.solvers.bounds import lower_bound
-from bille.solvers.classes import BY_KEY, CLASSES, class_bounds, classes_of
+from bille.solvers.bounds.classes import BY_KEY, CLASSES, class_bounds, classes_of
 from helpers import make, sched
 from refsearch import class_optimum
 from test_soundness import MANY, QUICK, reference
@@ -169,7 +169,7 @@ def test_solve_reports_the_class_bounds_beside_the_bound_for_every_schedule():
 
 
 def test_a_schedule_below_its_class_bound_is_a_contradiction(monkeypatch):
-    import bille.solvers.classes as classes
+    import bille.solvers.bounds.classes as classes
 
     real = classes.class_bounds
 
@@ -203,8 +203,8 @@ BRIDGE = make("""
 
 
 def test_pinned_cells_raise_the_no_scaffold_bound_to_the_class_optimum():
-    from bille.solvers.ground import Ground
-    from bille.solvers.classes import pinned
+    from bille.solvers.bounds.ground import Ground
+    from bille.solvers.bounds.classes import pinned
 
     both = BRIDGE.start.tiles | BRIDGE.goal_tiles
     assert sorted(BRIDGE.world.xy(c) for c in pinned(BRIDGE, both).nonzero()[0]) == \

@@ -329,7 +329,7 @@ def test_the_dimacs_dump_is_compact_and_names_variables_first(tmp_path):
 
 @pytest.mark.parametrize("method", ["cpsat", "sat"])
 def test_an_incumbent_above_the_horizon_cap_is_still_returned(method, optimum, monkeypatch):
-    from bille.solvers import bounds, scaffold
+    from bille.solvers.bounds import scaffold, static as bounds
 
     # without the scaffold scenarios, whose bound is the optimum, 9
     monkeypatch.setattr(bounds, "scaffold_search", lambda *a, **k: scaffold.Scenarios([]))
@@ -353,7 +353,7 @@ def test_the_default_cap_gives_way_to_a_longer_incumbent(method, optimum, monkey
     # to it (a cap given stays, as the test above shows)
     from bille.solvers.exact import method as exact
 
-    from bille.solvers import bounds, scaffold
+    from bille.solvers.bounds import scaffold, static as bounds
 
     # without the scaffold scenarios, whose bound is the optimum, 9
     monkeypatch.setattr(bounds, "scaffold_search", lambda *a, **k: scaffold.Scenarios([]))

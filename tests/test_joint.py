@@ -19,7 +19,7 @@ from bille.instances.run import Budget, Events, Run
 from bille.instances.successors import candidate_actions, disjoint_products
 from bille.solvers import solve, validate
 from bille.solvers.bfs import Options, plan
-from bille.solvers.classes import classes_of
+from bille.solvers.bounds.classes import classes_of
 from bille.solvers.joint.cells import cells_of
 from bille.solvers.joint.store import successors
 from bille.solvers.joint.tables import compile_tables

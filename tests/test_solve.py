@@ -51,7 +51,7 @@ def slow_bound(monkeypatch, clock):
         clock.now += seconds[0]
         return Bounds(3, {"slow part": 3}, [])
 
-    import bille.solvers.classes  # noqa: F401  (imported first, it keeps the real bound for the class bounds)
+    import bille.solvers.bounds.classes  # noqa: F401  (imported first, it keeps the real bound for the class bounds)
     monkeypatch.setattr("bille.solvers.bounds.lower_bound", lower_bound)
     return asked, seconds
 

@@ -18,8 +18,8 @@ from bille.solvers import bind, schedule_from_text, solve, validate
 from bille.solvers.bfs import Options as BfsOptions
 from bille.solvers.bfs import plan as bfs
 from bille.solvers.bounds import lower_bound
-from bille.solvers.ground import EVERYWHERE
-from bille.solvers.routing import routing_bound
+from bille.solvers.bounds.ground import EVERYWHERE
+from bille.solvers.bounds.routing import routing_bound
 from helpers import make
 from tinyworlds import tiny_instances
 
@@ -261,8 +261,8 @@ def test_tiles_to_move_and_no_robot_is_proved_impossible():
 def test_every_schedule_keeps_to_its_own_scaffold_scenario():
     # the theorem behind the scaffold scenarios, scenario by scenario: the program of a
     # schedule's own scenario (its lines' places forced, its ground only) is at most its makespan
-    from bille.solvers.classes import tiles_over_time
-    from bille.solvers.scaffold import corridor_lines, scenario_of, scenario_value
+    from bille.solvers.bounds.classes import tiles_over_time
+    from bille.solvers.bounds.scaffold import corridor_lines, scenario_of, scenario_value
     from tinyworlds import bridge_instance
 
     from bille.instances import load_instance

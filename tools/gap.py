@@ -13,7 +13,7 @@ Every method configuration runs on every instance under the same time limit. Per
   the schedule is than the optimum *at most*, whatever the optimum; and ``gap_percent``, the
   exact gap, where some method proved the optimum;
 - on an instance that moves tiles, ``classes``: the classes of schedules the row's schedule
-  belongs to (:mod:`bille.solvers.classes`, read from the schedule), and against the narrowest
+  belongs to (:mod:`bille.solvers.bounds.classes`, read from the schedule), and against the narrowest
   of them (``class``), ``class_lower_bound`` (the best bound on that class proved in the run) and
   ``class_gap_percent``: how much longer the schedule is than the best schedule *of its class*,
   at most. A class gap is not a certified gap: a schedule outside the class may be shorter.
@@ -208,7 +208,7 @@ def _file_row(inst, label, schedule, schedules) -> dict:
     report = validate(inst, schedule)
     if schedules is not None:
         schedules[inst.name, label] = schedule
-    from bille.solvers.classes import applies, classes_of
+    from bille.solvers.bounds.classes import applies, classes_of
 
     return _row(inst, label, "given", report.metrics, note="schedule file",
                 classes=classes_of(inst, schedule) if applies(inst) else None)
@@ -248,7 +248,7 @@ def _certify_classes(inst: Instance, rows: list[dict]) -> None:
     """Each row's gap within the narrowest class its schedule belongs to, against the best
     bound on that class proved by any row (a row whose proofs contradicted its schedule proves
     nothing)."""
-    from bille.solvers.classes import CLASSES
+    from bille.solvers.bounds.classes import CLASSES
 
     best: dict[str, int] = {}
     for r in rows:

@@ -111,7 +111,7 @@ def _result_lines(inst, method: str, result) -> list[str]:
     if "restricted_lower_bound" in stats:
         lines.append(f"lower bound among those schedules: {stats['restricted_lower_bound']}")
     if "class_bounds" in stats:
-        from bille.solvers.classes import report
+        from bille.solvers.bounds.classes import report
 
         makespan = result.metrics.makespan if result.metrics else None
         lines += report(makespan, result.lower_bound, stats["class_bounds"], stats.get("classes"))

@@ -23,7 +23,7 @@ bound in turn, until they meet (``optimal``) or the time runs out (``feasible``,
      child has not refuted two horizons yet), it takes the static bound's scaffold scenarios
      further, once, where their share of the static bound's time left them undone
      (:class:`.rise.Scaffold`, with the per-robot integer program of
-     :mod:`bille.solvers.routing`).
+     :mod:`bille.solvers.bounds.routing`).
    - **Shortening the schedule**: large neighbourhood search over time windows (after MAPF-LNS,
      Li et al., IJCAI 2021). A window ``[a, b]`` of the schedule is re-solved exactly with the
      time-expanded model: from the state at ``a`` (tiles, poses, loads) to exactly the state at

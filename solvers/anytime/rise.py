@@ -169,7 +169,7 @@ def _ignore_ctrl_c() -> None:
 
 
 class Scaffold:
-    """The static bound's scaffold scenarios (:class:`bille.solvers.scaffold.Scenarios`) taken
+    """The static bound's scaffold scenarios (:class:`bille.solvers.bounds.scaffold.Scenarios`) taken
     further, where its share of the static bound's time cut the search short or the per-robot
     integer program of its least scenario is not solved yet: once, while the neighbourhood search
     finds nothing and :class:`Ahead` has no horizon to decide, for up to a quarter of the time

@@ -203,12 +203,12 @@ def makespan_search(job: Job, instance: Instance, run: Run | None, max_makespan:
 
 
 def _class_bound(job: Job, instance: Instance, bounds: Bounds, budget: Budget):
-    """For a restricted search, the bound of its class of schedules (:mod:`bille.solvers.classes`:
+    """For a restricted search, the bound of its class of schedules (:mod:`bille.solvers.bounds.classes`:
     ``no_scaffold``, ``keep_structure`` and ``single_carry`` are the classes of those names),
     where its horizons start: every horizon below it has no schedule of the class. None for an
     unrestricted search or where the static bound proves the instance infeasible. The class
     bounds ``solve()`` computed with the static bound are used, else computed here."""
-    from bille.solvers.classes import RESTRICTIONS, applies, class_bounds
+    from bille.solvers.bounds.classes import RESTRICTIONS, applies, class_bounds
 
     if job.restriction is None or bounds.impossible or not applies(instance):
         return None

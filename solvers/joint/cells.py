@@ -60,7 +60,7 @@ class Cells:
 
     @property
     def class_key(self) -> str | None:
-        """The key of the same set in :mod:`bille.solvers.classes` (None when widened or ``all``)."""
+        """The key of the same set in :mod:`bille.solvers.bounds.classes` (None when widened or ``all``)."""
         return None if self.added else CLASS_KEYS.get(self.kind)
 
     def to_json(self) -> dict:

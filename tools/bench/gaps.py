@@ -9,7 +9,7 @@ window), the best schedule
 and its first schedule's method and makespan, how many windows of each neighbourhood search
 (free, kept) shortened it, the certified gap ``(makespan - LB) / LB`` and the seconds at which
 each end reached its final value. Beside them, on an instance that moves tiles, the bound of each
-class of schedules (:mod:`bille.solvers.classes`: ``no-scaffold``, ``keep-structure``,
+class of schedules (:mod:`bille.solvers.bounds.classes`: ``no-scaffold``, ``keep-structure``,
 ``single-carry``), the classes the schedule belongs to (``N``, ``K``, ``S``: read from it), and its
 gap within the narrowest of them: never a certified gap, since a schedule outside the class may
 be shorter.
@@ -25,7 +25,7 @@ which side of the class gap is open, measured.
 from __future__ import annotations
 
 from bille.solvers import solve
-from bille.solvers.classes import CLASSES
+from bille.solvers.bounds.classes import CLASSES
 
 from ..common import instance_arg, solved
 from ..tables import text_table

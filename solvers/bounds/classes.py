@@ -50,7 +50,7 @@ import numpy as np
 from bille.instances import Instance
 from bille.instances.run import Budget
 
-from .bounds import lower_bound
+from .static import lower_bound
 from .ground import Ground
 
 
