@@ -51,6 +51,19 @@ class Options(LoopOptions):
                                  help="expansions (vertices and intermediate nodes) before giving up")
 
 
+def method(instance: Instance, options: Options | None = None, run: Run | None = None):
+    """The method ``mstar``: M* (:func:`plan`) on a fixed structure; on an instance that moves
+    tiles, the reconfiguration loop with M* as its motion layer (not optimal)."""
+    from .loop import reconfigure
+
+    o = options or Options()
+    if instance.is_reconfiguration:
+        return reconfigure.plan(instance, motion="mstar", load_transfer=o.load_transfer, d_tr=o.d_tr,
+                                epsilon=o.epsilon, run=run, max_steps=o.max_steps, active=o.active)
+    o.check_instance(instance)
+    return plan(instance, o, run)
+
+
 def plan(instance: Instance, options: Options | None = None, run: Run | None = None):
     """M*: minimum sum of costs (then makespan) on a fixed structure (:class:`Options`; the method
     ``mstar`` hands an instance that moves tiles to the reconfiguration loop, :mod:`.reconfigure`,

@@ -8,10 +8,12 @@ under classic collisions, whether it searches from the static bound (``solve()``
 first and hands it over), and its default time limit. ``bille methods``, ``-O help``, ``solve()``
 and the parametrized tests read the records.
 
-The paper's planners walk on a fixed structure; on an instance that moves tiles, ``mstar``
-and ``lacam`` run the reconfiguration loop (:mod:`bille.heuristics.loop.reconfigure`) with the
-planner as its motion layer, which is decided here, not by the planners. ``temporal-astar``
-always runs the loop: path planning is the loop with no jobs.
+The registry names entry points only: what a method does on which instance is its own package's
+decision (the paper's planners walk on a fixed structure; on an instance that moves tiles,
+``mstar`` and ``lacam`` run the reconfiguration loop, :mod:`bille.heuristics.loop.reconfigure`,
+with the planner as its motion layer, :func:`bille.heuristics.mstar.method` and
+:func:`bille.heuristics.lacam.method.method`; ``temporal-astar`` always runs the loop: path
+planning is the loop with no jobs).
 """
 from __future__ import annotations
 
@@ -21,71 +23,9 @@ from collections.abc import MutableMapping
 from dataclasses import dataclass
 from typing import Callable, Iterator
 
-from bille.instances import Instance, OptionError
+from bille.instances import Instance
 from bille.instances.result import Result
 from bille.instances.run import Run
-
-
-def plan_temporal_astar(instance: Instance, options=None, run: Run | None = None) -> Result:
-    """Temporal A* (:func:`bille.heuristics.temporal_astar.plan`): the reconfiguration loop with
-    Temporal A* as its motion layer, on path planning with no jobs."""
-    from bille.heuristics import temporal_astar
-
-    return temporal_astar.plan(instance, options, run)
-
-
-def plan_mstar(instance: Instance, options=None, run: Run | None = None) -> Result:
-    """M* (:func:`bille.heuristics.mstar.plan`); on an instance that moves tiles, the
-    reconfiguration loop with M* as its motion layer."""
-    from bille.heuristics import mstar
-    from bille.heuristics.loop import reconfigure
-
-    o = options or mstar.Options()
-    if instance.is_reconfiguration:
-        return reconfigure.plan(instance, motion="mstar", load_transfer=o.load_transfer, d_tr=o.d_tr,
-                                epsilon=o.epsilon, run=run, max_steps=o.max_steps, active=o.active)
-    o.check_instance(instance)
-    return mstar.plan(instance, o, run)
-
-
-# of the time limit, at most, for the loop before the complete search takes over: the loop
-# either finishes in a second or two or not at all (measured on a random 10x8 instance with four
-# robots and ten moved tiles, `bille gen random --robots 4 --moved 10 --seed 2`: its motion layer
-# finds no joint plan in 60 s, where the whole-state search finds a schedule in 17 s)
-LOOP_SHARE = 0.5
-
-
-def plan_lacam(instance: Instance, options=None, run: Run | None = None) -> Result:
-    """LaCAM* (:func:`bille.heuristics.lacam.plan`). On an instance that moves tiles, the
-    reconfiguration loop with LaCAM* as its motion layer (``load_transfer``, ``d_tr``,
-    ``max_steps``, ``active`` as for the loop), and where the loop gives up, or runs out of its
-    share of the time limit (:data:`LOOP_SHARE`), LaCAM* over whole states (every robot taking
-    jobs; :mod:`bille.heuristics.lacam.states`) with the time left: complete, so the method
-    finds a schedule whenever one exists (time and memory permitting) and proves ``infeasible``
-    when its space is exhausted. ``objective`` is for path planning; ``improve``, ``max_nodes``
-    and ``seed`` for the searches over configurations."""
-    from bille.heuristics import lacam
-
-    o = options or lacam.Options()
-    if not instance.is_reconfiguration:
-        o.check_instance(instance)
-        return lacam.plan(instance, o, run)
-    from bille.heuristics.lacam import states as lacam_states  # (and scipy's graph routines) for an instance that moves tiles
-    from bille.heuristics.loop import reconfigure
-    if instance.collisions == "classic":
-        raise OptionError(f"lacam: instance '{instance.name}' moves tiles under classic collisions; "
-                          "the reconfiguration loop plans under the Bill-E rule only")
-    o.check_instance(instance)
-    run = run or Run()
-    loop = reconfigure.plan(instance, motion="lacam", load_transfer=o.load_transfer, d_tr=o.d_tr,
-                            run=run.part(run.budget.share(LOOP_SHARE)), max_steps=o.max_steps, active=o.active,
-                            method="lacam")
-    if loop.status not in ("unsolved", "timeout") or run.budget.expired():
-        return loop
-    whole = lacam_states.plan(instance, run=run, improve=o.improve, max_nodes=o.max_nodes, seed=o.seed)
-    whole.stats["loop"] = {"status": loop.status, "failure": loop.stats.get("failure"),
-                           "steps": loop.stats.get("steps", 0)}
-    return whole
 
 
 @dataclass(frozen=True)
@@ -160,13 +100,13 @@ METHODS = Registry([
            "least sum of costs (or makespan) on a fixed structure, classic or Bill-E collisions; see docs/cbs.md",
            "optimal with w 1 (over every schedule where no free cell touches a tile); a lower bound on the "
            "sum of costs otherwise", classic=True, time_limit=60.0),
-    Method("mstar", f"{__name__}:plan_mstar", f"{_H}.mstar:Options",
+    Method("mstar", f"{_H}.mstar:method", f"{_H}.mstar:Options",
            "as astar, by subdimensional expansion; on a reconfiguration, the loop's motion layer",
            "optimal with epsilon 1 on a fixed structure; nothing on a reconfiguration"),
-    Method("temporal-astar", f"{__name__}:plan_temporal_astar", f"{_H}.temporal_astar:Options",
+    Method("temporal-astar", f"{_H}.temporal_astar:plan", f"{_H}.temporal_astar:Options",
            "the paper's prioritized planner in a window of H steps; on a reconfiguration, the loop's motion layer",
            "nothing (feasible schedules)"),
-    Method("lacam", f"{__name__}:plan_lacam", f"{_H}.lacam:Options",
+    Method("lacam", f"{_H}.lacam.method:method", f"{_H}.lacam:Options",
            "LaCAM*: complete and anytime; on a reconfiguration, the loop then a search over whole states",
            "optimal walking makespan when its search space is exhausted; infeasible when the whole-state "
            "search is", classic=True),

@@ -200,7 +200,7 @@ def test_a_loop_out_of_its_share_of_the_time_hands_over_to_the_complete_search(m
     joint plan), the whole-state search still gets the rest and finds the schedule."""
     from bille.heuristics.loop import reconfigure
     from bille.instances.result import Result
-    from bille.solvers import registry
+    from bille.heuristics.lacam import method as lacam_method
 
     given = []
 
@@ -212,7 +212,7 @@ def test_a_loop_out_of_its_share_of_the_time_hands_over_to_the_complete_search(m
     name = next(i.name for i in TINY_RECONFIGURATION if brute_force(i.name).status == "optimal")
     inst = next(i for i in TINY_RECONFIGURATION if i.name == name)
     result = solve(inst, "lacam", time_limit=20, improve=0.0)
-    assert given == [pytest.approx(registry.LOOP_SHARE * 20, abs=0.01)] and registry.LOOP_SHARE < 1
+    assert given == [pytest.approx(lacam_method.LOOP_SHARE * 20, abs=0.01)] and lacam_method.LOOP_SHARE < 1
     assert result.status == "feasible" and validate(inst, result.schedule).valid
     assert result.metrics.makespan >= brute_force(name).metrics.makespan
     assert result.stats["loop"]["status"] == "timeout"
