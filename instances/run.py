@@ -40,6 +40,10 @@ class _Flag:
         self.set = False
 
 
+# why a budget stopped a search (:meth:`Budget.why`): the failures a method writes for it
+TIME_LIMIT, INTERRUPTED = "time limit", "interrupted"
+
+
 class Budget:
     """Seconds a run may take from now (None: no limit), and whether it was cancelled.
 
@@ -84,9 +88,9 @@ class Budget:
         return self._flag.set or (self.end is not None and self.clock() >= self.end)
 
     def why(self) -> str:
-        """Why a search that stopped at its budget stopped: ``interrupted`` (cancelled, Ctrl-C) or
-        ``time limit``; the failure a method writes (``stats.failure``)."""
-        return "interrupted" if self._flag.set else "time limit"
+        """Why a search that stopped at its budget stopped: :data:`INTERRUPTED` (cancelled, Ctrl-C)
+        or :data:`TIME_LIMIT`; the failure a method writes (``stats.failure``)."""
+        return INTERRUPTED if self._flag.set else TIME_LIMIT
 
     def child(self, seconds: float | None = None) -> Budget:
         """A budget for a part: ``seconds`` from now (None: what is left), never past this one's
@@ -152,4 +156,4 @@ class Run:
         return Run(budget, self.events)
 
 
-__all__ = ["Budget", "Events", "Run"]
+__all__ = ["INTERRUPTED", "TIME_LIMIT", "Budget", "Events", "Run"]

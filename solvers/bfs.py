@@ -30,7 +30,7 @@ from bille.instances import Instance, OptionError
 from bille.instances.limits import address_room, human, memory_budget
 from bille.instances.options import MethodOptions, option
 from bille.instances.result import Result
-from bille.instances.run import Run
+from bille.instances.run import INTERRUPTED, TIME_LIMIT, Run
 from bille.instances.schedule import Schedule, bind
 
 from .joint.cells import KINDS, Cells, cells_of
@@ -170,7 +170,7 @@ def _result(instance: Instance, cells: Cells, out, upper, incumbent, options: Op
             stats["failure"] = f"no schedule among {cells.name} exists"
             proved = None
     else:
-        failure = {"time": "time limit", "cancelled": "interrupted", "states": f"state cap ({out.states:,} states)",
+        failure = {"time": TIME_LIMIT, "cancelled": INTERRUPTED, "states": f"state cap ({out.states:,} states)",
                    "steps": "step bound"}[out.stop]
         stats["failure"] = failure
         status = {"time": "timeout", "cancelled": "interrupted"}.get(out.stop, "unsolved")

@@ -18,7 +18,7 @@ from bille.heuristics.lacam import states as lacam_states
 from bille.heuristics.loop import reconfigure
 from bille.instances import Instance, OptionError
 from bille.instances.metrics import makespan as ids_makespan
-from bille.instances.run import Budget, Run
+from bille.instances.run import TIME_LIMIT, Budget, Run
 from bille.instances.schedule import Schedule, bind
 
 from .compact import compact
@@ -214,7 +214,7 @@ def _portfolio(instance: Instance, runs, budget: Budget, improve: bool, first: b
 def _cut_short(found) -> bool:
     """Whether a run without a schedule ended because its time ran out between the loop's steps
     (see :func:`retry`)."""
-    return found is not None and found.stats.get("failure") == "time limit"
+    return found is not None and found.stats.get("failure") == TIME_LIMIT
 
 
 def _compact_s(budget: float | None) -> float | None:
