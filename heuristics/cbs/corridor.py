@@ -48,25 +48,31 @@ CORRIDOR = 5  # a conflict kind, after the rectangle's
 class Corridors:
     """The corridors of the robots' walking graphs and the distances the split needs (cached)."""
 
-    def __init__(self, agents: list[Agent]) -> None:
+    def __init__(self, agents: list[Agent], caches: tuple | None = None) -> None:
         self.agents = agents
-        self._chains: dict[tuple[int, int], tuple | None] = {}
-        self._dist: dict[tuple[int, frozenset], tuple[dict, deque]] = {}  # searches under way
-        self._neighbours: dict[tuple[int, int], list[int]] = {}
+        # keyed by walking graph (chains, neighbours) and by robot (distances: from its start), so
+        # the searches over pairs of robots share them with the search over all (``caches``)
+        self.caches = caches or ({}, {}, {})
+        self._chains, self._dist, self._neighbours = self.caches
+
+    def _graph(self, k: int) -> int:
+        """The walking graph of robot ``k`` (robots of one moveset share one), as a key."""
+        moves = self.agents[k].moves
+        return id(getattr(moves, "__self__", moves))
 
     def neighbours(self, k: int, p: int) -> list[int]:
         """The cells robot ``k`` can move to from ``p`` (each once: two actions may go alike);
         cached per walking graph, which robots of one moveset share."""
-        moves = self.agents[k].moves
-        key = (id(getattr(moves, "__self__", moves)), p)
+        key = (self._graph(k), p)
         found = self._neighbours.get(key)
         if found is None:
-            found = self._neighbours[key] = list(dict.fromkeys(q for _, q, _ in moves(p) if q != p))
+            moves = self.agents[k].moves(p)
+            found = self._neighbours[key] = list(dict.fromkeys(q for _, q, _ in moves if q != p))
         return found
 
     def chain(self, k: int, v: int) -> tuple[frozenset, int, int, int] | None:
         """``(C, a, b, k)`` for the corridor through cell ``v`` of robot ``k``'s graph, or None."""
-        key = (k, v)
+        key = (self._graph(k), v)
         if key not in self._chains:
             self._chains[key] = self._walk(k, v)
         return self._chains[key]
@@ -90,7 +96,7 @@ class Corridors:
         """Robot ``k``'s walking distance from its start to ``target`` avoiding ``avoid``: a
         breadth-first search from the start kept per ``(k, avoid)`` and taken only as far as the
         targets asked for so far need (so a near target costs a few cells, not the map)."""
-        key = (k, avoid)
+        key = (self.agents[k].index, avoid)
         search = self._dist.get(key)
         if search is None:
             if len(self._dist) > 4096:

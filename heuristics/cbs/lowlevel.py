@@ -132,6 +132,10 @@ def search(agent: Agent, table: Table, avoid: Avoid | None, classic: bool, *,
     cap = max(table.last, 0 if avoid is None else avoid.last) + 1
     banned_at, edges_at, ranges, range_cells = table.at.get, table.edges.get, table.ranges, table.range_cells
     count = None if avoid is None else avoid.count
+    # classic collisions' table (.classic.ClassicAvoid): its count written out below, once per move
+    at = getattr(avoid, "at", None) if classic else None
+    if at is not None:
+        at_get, at_moves, at_last, at_size = at.get, avoid.moves, avoid.last, avoid.size
     counter = 0
     frontier = [(max(dist[start], min_arrival), 0, 0, counter, start, 0)]
     # per node, the best (time, conflicts) that reached it; past ``cap`` one node holds all times
@@ -166,7 +170,13 @@ def search(agent: Agent, table: Table, avoid: Avoid | None, classic: bool, *,
                     (range_cells and not range_cells.isdisjoint(cells) and
                      any(t1 >= ranges[c] for c in cells if c in ranges)):
                 continue
-            k1 = k if count is None else k + count(p, q, cells, t1)
+            if at is not None:  # ClassicAvoid.count
+                if t1 > at_last:
+                    k1 = k + at_get((at_last + 1) * at_size + q, 0)
+                else:
+                    k1 = k + at_get(t1 * at_size + q, 0) + (p != q and ((t1 * at_size + q) * at_size + p) in at_moves)
+            else:
+                k1 = k if count is None else k + count(p, q, cells, t1)
             key1 = (q, t1 if t1 < cap else cap)
             if (t1, k1) < best.get(key1, _UNSEEN):
                 best[key1] = (t1, k1)

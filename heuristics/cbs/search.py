@@ -90,10 +90,10 @@ class Tree:
     grid's, where rectangle reasoning applies (point robots moving one cell at a time)."""
 
     def __init__(self, agents: list[Agent], classic: bool, settings: Settings, poll, stats: dict,
-                 width: int | None = None, told=None) -> None:
+                 width: int | None = None, told=None, corridors: tuple | None = None) -> None:
         self.agents, self.classic, self.settings = agents, classic, settings
         self.width = width if classic and settings.rectangle else None
-        self.corridors = Corridors(agents) if classic and settings.corridor else None
+        self.corridors = Corridors(agents, corridors) if classic and settings.corridor else None
         self.poll, self.stats = poll, stats
         self.soc = settings.objective == "sum-of-costs"
         self._tables: dict[tuple, Table] = {}
@@ -242,7 +242,7 @@ class Tree:
         pair = Tree([self.agents[i], self.agents[j]], self.classic,
                     Settings(heuristic="cg", rectangle=self.settings.rectangle, corridor=self.settings.corridor,
                              max_nodes=PAIR_NODES), self.poll, {},
-                    self.width)
+                    self.width, corridors=None if self.corridors is None else self.corridors.caches)
         start = pair.root((node.constraints[i], node.constraints[j]), [node.paths[i], node.paths[j]])
         found = pair.best(start)
         base = node.costs[i] + node.costs[j]
