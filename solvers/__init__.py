@@ -58,7 +58,7 @@ def solve(instance: Instance | str, method: str = "auto", progress=None, *, boun
     static argument proved that none exists, or ``optimal`` makespan without a matching proof.
 
     Wherever the static bound is computed on an instance that moves tiles, the bounds of the
-    classes of schedules (:mod:`.classes`) are computed too, in the time left, into
+    classes of schedules (:mod:`.bounds.classes`) are computed too, in the time left, into
     ``stats["class_bounds"]``, and the classes the schedule belongs to into ``stats["classes"]``
     (read from the schedule). They are never the result's ``lower_bound``, which holds for every
     schedule; a schedule of a class shorter than the class's bound is a contradiction too.
@@ -171,7 +171,7 @@ def _both(first, second):
 
 def _static_bound(instance: Instance, budget: Budget, progress):
     """The static bound, its slow part left out once ``budget`` expires, with the class bounds in
-    its ``classes`` (:mod:`.classes`; None on a fixed structure, where the bound proves the
+    its ``classes`` (:mod:`.bounds.classes`; None on a fixed structure, where the bound proves the
     instance infeasible, or when the time is up), and the seconds they took; ``progress`` is
     told the static bound (with the seconds since the run began)."""
     from .bounds import lower_bound

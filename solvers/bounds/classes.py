@@ -1,6 +1,6 @@
 """Classes of schedules, and lower bounds that hold within each (certificates per class).
 
-A lower bound for *every* schedule (:mod:`.bounds`) is the only one that makes a certified gap.
+A lower bound for *every* schedule (:mod:`.static`) is the only one that makes a certified gap.
 Within a class of schedules much more can be proved: on the load-transfer maps, the schedules that
 never set a tile down in the gap between the platforms need several steps more than the best
 unconditional bound shows. A user comparing planners that build no such scaffold wants that
@@ -21,7 +21,7 @@ with a tile at the start and in the goal:
     Besides, every cell where they differ changes once: each tile is carried once, straight from
     its start cell to its goal cell (the exact methods' ``single_carry`` restriction).
 
-**The bound of a class** (:func:`class_bounds`) is the static bound of :mod:`.bounds` computed on
+**The bound of a class** (:func:`class_bounds`) is the static bound of :mod:`.static` computed on
 the class's *ground* (:class:`.ground.Ground`). In a schedule of ``no-scaffold``, every tile at
 every step is on a cell of ``A = S | G``; a robot's feet stand on tiles (rule 4), so every pose it
 takes has both feet in ``A``, and a pick or a place targets a cell that holds a tile just before

@@ -1,4 +1,4 @@
-"""The ``crossings`` part of the static bound (:mod:`.bounds`): tiles that must cross a line, and
+"""The ``crossings`` part of the static bound (:mod:`.static`): tiles that must cross a line, and
 the trips of the robots that carry them across.
 
 Draw a line between two columns (or two rows) of the grid: ``X`` the cells on one side, ``Y`` the

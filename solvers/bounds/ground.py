@@ -1,5 +1,5 @@
 """Where the schedules considered stand and work: the cells their feet, picks and places may use
-(:class:`Ground`), for the bounds (:mod:`.bounds`, :mod:`.routing`, :mod:`.scaffold`) within a
+(:class:`Ground`), for the bounds (:mod:`.static`, :mod:`.routing`, :mod:`.scaffold`) within a
 class of schedules (:mod:`.classes`) or a scenario of scaffold."""
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
 """A lower bound on the makespan from the robots' routes: carrying *and* walking back for more
-(a part of :mod:`.bounds`, "routing (LP)").
+(a part of :mod:`.static`, "routing (LP)").
 
 **The theorem.** Take any valid schedule of makespan ``T``. Each robot's actions split into
 *carries* (from a pick to the next place: the pick, the motions, the place) and *walks* (from

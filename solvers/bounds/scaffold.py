@@ -1,5 +1,5 @@
 """A lower bound on the makespan that prices scaffold: the routing bound per scaffold scenario
-(a part of :mod:`.bounds`, "scaffold scenarios (LP)").
+(a part of :mod:`.static`, "scaffold scenarios (LP)").
 
 The routing bound (:mod:`.routing`) lets robots walk anywhere, over empty cells too: a schedule
 can only do so on tiles it set down there first (rule 4), and each such tile costs a place (and a
