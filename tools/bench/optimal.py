@@ -14,7 +14,7 @@ program prints (the search, without reading files); bille's is ``cbs``'s own, wi
 """
 from __future__ import annotations
 
-import math
+import statistics
 import os
 import subprocess
 import tempfile
@@ -147,7 +147,7 @@ def peer_table(rows: list[dict]) -> list[str]:
                       None if ratio is None else f"{ratio:.2f}", note])
     columns = ["instance", "bille SOC", "bille [s]", "bille nodes", "peer SOC", "peer [s]", "time ratio", "note"]
     out = text_table(columns, lines, right=set(columns[1:7]))
-    mean = math.exp(sum(map(math.log, ratios)) / len(ratios)) if ratios else None
+    mean = statistics.geometric_mean(ratios) if ratios else None
     out.append(f"both proved {counts['both']}, only bille {counts['bille_only']}, only the peer {counts['peer_only']}, "
                f"neither {counts['neither']}; different costs {counts['differ']}")
     out.append("geometric mean of bille's time over the peer's, where both proved: "

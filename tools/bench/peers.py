@@ -10,6 +10,7 @@ costs counts; an invalid one counts as a failure.
 from __future__ import annotations
 
 import json
+from statistics import geometric_mean
 import re
 import subprocess
 import sys
@@ -62,22 +63,29 @@ def peer_at(name: str, path: Path) -> Path:
     return path
 
 
+def program_output(command, name: str, seconds: float) -> str | dict:
+    """Run a peer's program, ``command(out)`` its arguments given the path of the file it writes
+    its answer to (``name``, in a folder of its own), for at most ``seconds``: the file's text,
+    or the row of a run that gave none (``{"status": "timeout"}`` or ``{"status": "failed"}``)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / name
+        try:
+            subprocess.run(command(out), capture_output=True, timeout=seconds, check=False)
+        except subprocess.TimeoutExpired:
+            return {"status": "timeout"}
+        return out.read_text() if out.is_file() else {"status": "failed"}
+
+
 def run_lacam3(binary: Path, map_file: Path, scen: Path, agents: int, instance: Instance, *,
                seconds: int, anytime: bool) -> dict:
     """lacam3 on the first ``agents`` rows of ``scen``: its first schedule (``--no-star``, one
     thread, as bille's) or its best after ``seconds`` (``anytime``); ``time_s`` as it reports it
     (planning, its distance tables included)."""
-    with tempfile.TemporaryDirectory() as tmp:
-        out = Path(tmp) / "result.txt"
-        args = [str(binary), "-m", str(map_file), "-i", str(scen), "-N", str(agents), "-t", str(seconds),
-                "-o", str(out)] + ([] if anytime else ["--no-star", "--no-multi-thread"])
-        try:
-            subprocess.run(args, capture_output=True, timeout=seconds + 30, check=False)
-        except subprocess.TimeoutExpired:
-            return {"status": "timeout"}
-        if not out.is_file():
-            return {"status": "failed"}
-        text = out.read_text()
+    text = program_output(lambda out: [str(binary), "-m", str(map_file), "-i", str(scen), "-N", str(agents), "-t",
+                                       str(seconds), "-o", str(out)]
+                          + ([] if anytime else ["--no-star", "--no-multi-thread"]), "result.txt", seconds + 30)
+    if isinstance(text, dict):
+        return text
     fields = dict(line.split("=", 1) for line in text.splitlines() if "=" in line and ":" not in line.split("=")[0])
     if fields.get("solved") != "1":
         return {"status": "unsolved", "time_s": int(fields.get("comp_time", 0)) / 1000}
@@ -145,8 +153,6 @@ def peers_table(rows: list[dict], names: list[str]) -> list[str]:
     time spent on the SUO paths (:mod:`bille.heuristics.lacam.scatter`), and per peer the ratios bille /
     peer of time and of sum of costs (below 1: bille faster, or cheaper); then per map the largest
     agent count each solved within :data:`LARGEST_S`, and the geometric means of the ratios."""
-    from math import exp, log
-
     from ..tables import text_table
 
     table, ratios = [], {n: ([], []) for n in names}
@@ -186,6 +192,6 @@ def peers_table(rows: list[dict], names: list[str]) -> list[str]:
     for n in names:
         t, c = ratios[n]
         if t:
-            lines.append(f"against {n}: geometric mean time ratio {exp(sum(map(log, t)) / len(t)):.2f}x, "
-                         f"sum of costs ratio {exp(sum(map(log, c)) / len(c)):.3f} ({len(t)} runs both solved)")
+            lines.append(f"against {n}: geometric mean time ratio {geometric_mean(t):.2f}x, "
+                         f"sum of costs ratio {geometric_mean(c):.3f} ({len(t)} runs both solved)")
     return lines

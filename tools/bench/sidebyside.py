@@ -22,21 +22,22 @@ both solved, the sum-of-costs ratio, and the rows one solved and the other did n
 from __future__ import annotations
 
 import csv
-import math
-import subprocess
+import io
 import tempfile
 from pathlib import Path
+from statistics import geometric_mean
 
 import yaml
 
 from bille.instances.generators.movingai import from_movingai
 from bille.instances.interop import to_mrp
-from bille.solvers import solve, validate
+from bille.solvers import solve
 
 from ..common import solved
 from ..tables import text_table
 from .maps import SCENARIO
 from .mapf import sum_of_costs
+from .peers import program_output, run_lacam3
 
 # the rows the peers were first compared on (the maps shipped with bille)
 OPTIMAL_ROWS = (("random-32-32-10", (30, 40, 50, 60)), ("room-32-32-4", (20, 30, 40)),
@@ -67,18 +68,11 @@ def parse_rows(text: str) -> tuple[tuple[str, tuple[int, ...]], ...]:
 def run_li(binary: Path, map_file: Path, scen: Path, agents: int, seconds: float, extra=()) -> dict:
     """CBSH2-RTC or EECBS on the first ``agents`` agents: ``status`` (optimal, timeout,
     infeasible, failed), its sum of costs and its time (runtime plus preprocessing)."""
-    with tempfile.TemporaryDirectory() as tmp:
-        out = Path(tmp) / "stats.csv"
-        args = [str(binary), "-m", str(map_file), "-a", str(scen), "-k", str(agents), "-t", str(seconds),
-                "-o", str(out), *extra]
-        try:
-            subprocess.run(args, capture_output=True, timeout=seconds + 60, check=False)
-        except subprocess.TimeoutExpired:
-            return {"status": "timeout"}
-        if not out.is_file():
-            return {"status": "failed"}
-        with out.open(newline="") as f:
-            rows = list(csv.DictReader(f))
+    text = program_output(lambda out: [str(binary), "-m", str(map_file), "-a", str(scen), "-k", str(agents), "-t",
+                                       str(seconds), "-o", str(out), *extra], "stats.csv", seconds + 60)
+    if isinstance(text, dict):
+        return text
+    rows = list(csv.DictReader(io.StringIO(text)))
     if not rows or "solution cost" not in rows[-1]:
         return {"status": "failed"}
     row = rows[-1]
@@ -102,9 +96,9 @@ def run_mrp(binary: Path, instance, seconds: float) -> dict:
 
 
 def bille_cbs(instance, seconds: float) -> dict:
-    result = solved(solve(instance, "cbs", time_limit=seconds))
+    result = solved(solve(instance, "cbs", time_limit=seconds))  # solve() validates the schedule it returns
     row = {"status": result.status, "time_s": result.time_s}
-    if result.status == "optimal" and validate(instance, result.schedule).valid:
+    if result.status == "optimal":
         row["soc"] = result.stats["sum_of_costs"]
     return row
 
@@ -112,7 +106,7 @@ def bille_cbs(instance, seconds: float) -> dict:
 def bille_lacam(instance, seconds: float) -> dict:
     result = solved(solve(instance, "lacam", time_limit=seconds, improve=0.0))
     row = {"status": result.status, "time_s": result.time_s, "scatter_s": result.stats.get("scatter_s")}
-    if result.schedule is not None and validate(instance, result.schedule).valid:
+    if result.metrics is not None:  # a valid schedule (solve() validates it)
         row["soc"] = sum_of_costs(instance, result.schedule)
     return row
 
@@ -120,7 +114,6 @@ def bille_lacam(instance, seconds: float) -> dict:
 def side_by_side(folder: Path, rows, peers: dict[str, Path], seconds: float, kind: str, told=None):
     """Yield one row per map and agent count: bille's run and each peer's, one after the other
     (so a loaded machine weighs on both alike). ``kind``: ``optimal`` or ``first``."""
-    from .peers import run_lacam3
 
     mine = bille_cbs if kind == "optimal" else bille_lacam
     warmed = False
@@ -187,8 +180,8 @@ def table(rows: list[dict], peers: list[str], kind: str) -> list[str]:
     lines = text_table(columns, body, right=set(columns[1:]))
     for p in peers:
         t, c = ratios[p]
-        mean = (lambda xs: math.exp(sum(map(math.log, xs)) / len(xs))) if t else None
-        head = (f"against {p}: geometric mean time ratio {mean(t):.2f}x, sum of costs ratio {mean(c):.3f} over "
+        head = (f"against {p}: geometric mean time ratio {geometric_mean(t):.2f}x, sum of costs ratio "
+                f"{geometric_mean(c):.3f} over "
                 f"{len(t)} rows both solved") if t else f"against {p}: no row both solved"
         lines.append(f"{head}; bille alone solved {only[p][0]}, {p} alone {only[p][1]}"
                      + (f"; {differ[p]} DIFFERENT COSTS" if differ[p] else ""))
