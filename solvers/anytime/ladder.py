@@ -23,7 +23,7 @@ from collections import deque
 import numpy as np
 
 from bille.instances import Instance
-from bille.instances.grid import articulation_points
+from bille.instances.grid import articulation_points, neighbour_table
 from bille.instances.run import Budget, Run
 from bille.instances.metrics import metrics
 from bille.instances.schedule import Schedule, bind
@@ -42,12 +42,11 @@ def candidates(instance: Instance) -> list[tuple[int, int]]:
     for c in queue:
         dist[c] = 0
     tiles = start | goal
+    nbr = neighbour_table(w, h).tolist()
     while queue:
         c = queue.popleft()
-        x, y = c % w, c // w
-        for nx, ny in ((x + 1, y), (x - 1, y), (x, y + 1), (x, y - 1)):
-            n = ny * w + nx
-            if 0 <= nx < w and 0 <= ny < h and tiles[n] and dist[n] < 0:
+        for n in nbr[c]:
+            if n >= 0 and tiles[n] and dist[n] < 0:
                 dist[n] = dist[c] + 1
                 queue.append(n)
     cells = [int(c) for c in np.flatnonzero(both & ~cut & (dist > 0))]
