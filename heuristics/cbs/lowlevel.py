@@ -217,19 +217,11 @@ def mdd(agent: Agent, table: Table, classic: bool, cost: int) -> MDD:
     steps: list[list] = [[]]
     for t in range(1, cost + 1):
         level, step = set(), []
-        banned, edges = table.at.get(t), table.edges.get(t)  # classic: allowed() written out
         for p in levels[-1]:
             for a, q, cells in moves(p):
-                if t + dist[q] > cost:
-                    continue
-                if classic:
-                    if (banned is not None and q in banned) or (edges is not None and (p, q) in edges) \
-                            or (q in table.ranges and t >= table.ranges[q]):
-                        continue
-                elif not allowed(table, classic, p, q, cells, t):
-                    continue
-                level.add(q)
-                step.append((p, q, cells))
+                if t + dist[q] <= cost and allowed(table, classic, p, q, cells, t):
+                    level.add(q)
+                    step.append((p, q, cells))
         levels.append(level)
         steps.append(step)
     home = agent.home
