@@ -53,6 +53,7 @@ class Walk:
         self._forward: LRU[np.ndarray] = LRU(64)
         self._reverse = None  # scipy's sparse graphs of the moves, built on first use (large graphs)
         self._forward_graph = None
+        self._adjacency: dict[bool, list[list[int]]] = {}  # reverse? -> the moves as lists (small graphs)
         self._components: np.ndarray | None = None
 
     # ---- moves --------------------------------------------------------------------------------
@@ -153,15 +154,13 @@ class Walk:
 
     def _lists(self, reverse: bool) -> list[list[int]]:
         """Each pose's successors (``reverse``: predecessors) by a move, waits left out."""
-        key = "_reverse_lists" if reverse else "_forward_lists"
-        out = self.__dict__.get(key)
+        out = self._adjacency.get(reverse)
         if out is None:
-            out = [[] for _ in range(self.succ.shape[0])]
+            out = self._adjacency[reverse] = [[] for _ in range(self.succ.shape[0])]
             for p, row in enumerate(self.succ.tolist()):
                 for q in row:
                     if q >= 0 and q != p:
                         (out[q] if reverse else out[p]).append(p if reverse else q)
-            self.__dict__[key] = out
         return out
 
     @staticmethod

@@ -54,14 +54,14 @@ def plan(instance: Instance, options, run: Run | None = None) -> Result:
         if not out_of_time and len(parent) <= max_states:
             return None
         return Result("bfs", "timeout" if out_of_time else "unsolved", lower_bound=depth + 1,
-                      stats=stats(_why(budget) if out_of_time else "state cap"),
+                      stats=stats(budget.why() if out_of_time else "state cap"),
                       time_s=budget.elapsed())
 
     try:
         while frontier:
             for n, s in enumerate(frontier, 1):
                 if n % CHECK_EVERY == 0 and budget.expired():  # levels below this one were checked
-                    return Result("bfs", "timeout", lower_bound=depth, stats=stats(_why(budget)),
+                    return Result("bfs", "timeout", lower_bound=depth, stats=stats(budget.why()),
                                   time_s=budget.elapsed())
                 if goal_violation(world, s, goal_tiles, goal_cells, depth) is None:
                     schedule = _unwind(instance, parent, s)
@@ -99,10 +99,6 @@ def plan(instance: Instance, options, run: Run | None = None) -> Result:
         return Result("bfs", "unsolved", lower_bound=max_steps + 1, stats=stats("step bound"),
                       time_s=budget.elapsed())
     return Result("bfs", "infeasible", stats=stats(), time_s=budget.elapsed())
-
-
-def _why(budget) -> str:
-    return budget.why()
 
 
 def _unwind(instance: Instance, parent: dict, state: State) -> Schedule:
