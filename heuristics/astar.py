@@ -17,7 +17,7 @@ from bille.instances import Instance
 from bille.instances.options import MethodOptions, option
 from bille.instances.run import Run
 
-from .joint import NO_WALK, OBJECTIVE, JointProblem, OutOfTime, to_result, unwind
+from .joint import CLAIM, NO_WALK, JointProblem, OutOfTime, to_result, unwind
 
 
 @dataclass(frozen=True)
@@ -43,11 +43,11 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
     epsilon, max_expansions = options.epsilon, options.max_expansions
     budget = (run or Run()).budget
     problem = JointProblem.of(instance, "astar")
-    stats = {"objective": OBJECTIVE, "epsilon": epsilon, "expanded": 0, "generated": 0}
+    stats = {"epsilon": epsilon, "expanded": 0, "generated": 0}
     if problem.unreachable():
         stats["unreachable"] = problem.unreachable()
         stats["failure"] = "unreachable"
-        return to_result(instance, "astar", "unsolved", None, stats=stats)
+        return to_result(instance, "astar", "unsolved", None, stats=stats, claim=CLAIM)
 
     m = instance.num_robots
     root = (problem.start, (0,) * m)
@@ -67,11 +67,11 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
         if problem.is_goal(poses):
             stats["sum_of_costs"] = g_soc
             status = "optimal" if epsilon == 1 else "feasible"
-            return to_result(instance, "astar", status, unwind(parent, key), stats=stats)
+            return to_result(instance, "astar", status, unwind(parent, key), stats=stats, claim=CLAIM)
         stats["expanded"] += 1
         if stats["expanded"] > max_expansions:
             stats["failure"] = "expansion cap"
-            return to_result(instance, "astar", "unsolved", None, stats=stats)
+            return to_result(instance, "astar", "unsolved", None, stats=stats, claim=CLAIM)
         try:
             if budget.expired():
                 raise OutOfTime
@@ -89,6 +89,6 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
                 heapq.heappush(frontier, (g[0] + epsilon * h[0], g[1] + h[1], next(counter), child))
         except OutOfTime:  # before the expansion, or within it (many robots: millions of children)
             stats["failure"] = budget.why()
-            return to_result(instance, "astar", "timeout", None, stats=stats)
+            return to_result(instance, "astar", "timeout", None, stats=stats, claim=CLAIM)
     stats["failure"] = NO_WALK
-    return to_result(instance, "astar", "unsolved", None, stats=stats)
+    return to_result(instance, "astar", "unsolved", None, stats=stats, claim=CLAIM)

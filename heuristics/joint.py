@@ -15,6 +15,7 @@ from typing import Iterator
 import numpy as np
 
 from bille.instances import Instance, OptionError
+from bille.instances.claim import EVERY, Claim
 from bille.instances.limits import CHECK_EVERY, check_budget
 from bille.instances.result import Result
 from bille.instances.run import Budget
@@ -24,7 +25,8 @@ from bille.instances.walking import UNREACHABLE, Walk, walk_for
 
 Poses = tuple[int, ...]
 Debts = tuple[int, ...]
-OBJECTIVE = "sum of costs, then makespan, walking only (no pick or place)"
+# what joint A* and M* minimize: the sum of costs, then the makespan, over walking schedules
+CLAIM = Claim("sum-of-costs", then="makespan", walking_only=True)
 
 
 class OutOfTime(Exception):
@@ -188,13 +190,15 @@ def schedule_ids(instance: Instance, steps: list[tuple[int, ...]]) -> np.ndarray
     return np.array(steps, dtype=np.int64).T.reshape(m, len(steps))
 
 
-def to_result(instance: Instance, method: str, status: str, steps: list | None, *, stats: dict):
+def to_result(instance: Instance, method: str, status: str, steps: list | None, *, stats: dict,
+              claim: Claim = EVERY):
     """A :class:`~bille.instances.result.Result` from a list of joint actions (or None). The
-    planners prove no lower bound: ``solve()`` adds the static one."""
+    planners prove no lower bound: ``solve()`` adds the static one; ``claim``: what an
+    ``optimal`` status is optimal for."""
     schedule = None
     if steps is not None:
         schedule = Schedule.from_ids(instance, schedule_ids(instance, steps), meta={"method": method})
-    return Result(method, status, schedule, stats=stats)
+    return Result(method, status, schedule, stats=stats, claim=claim)
 
 
 def unwind(parent: dict, key) -> list:

@@ -30,7 +30,7 @@ from bille.instances import Instance
 from bille.instances.options import option
 from bille.instances.run import Budget, Run
 
-from .joint import NO_WALK, OBJECTIVE, JointProblem, OutOfTime, to_result, unwind
+from .joint import CLAIM, NO_WALK, JointProblem, OutOfTime, to_result, unwind
 from .loop.loop_options import LoopOptions
 
 INF = (1 << 60, 0)
@@ -91,7 +91,7 @@ class _MStar:
         self.max_expansions = max_expansions
         self.problem = problem
         self.policy = [_policy(self.problem, i) for i in range(len(problem.walks))]
-        self.stats = {"objective": OBJECTIVE, "epsilon": epsilon, "od": od,
+        self.stats = {"epsilon": epsilon, "od": od,
                       "expanded": 0, "generated": 0, "largest_collision_set": 0}
         self.g: dict = {}
         self.parent: dict = {}
@@ -141,9 +141,9 @@ class _MStar:
         if problem.unreachable():
             stats["unreachable"] = problem.unreachable()
             stats["failure"] = "unreachable"
-            return to_result(instance, "mstar", "unsolved", None, stats=stats)
+            return to_result(instance, "mstar", "unsolved", None, stats=stats, claim=CLAIM)
         status, steps = self.search()
-        return to_result(instance, "mstar", status, steps, stats=stats)
+        return to_result(instance, "mstar", status, steps, stats=stats, claim=CLAIM)
 
     def search(self) -> tuple[str, list | None]:
         problem, stats = self.problem, self.stats

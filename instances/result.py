@@ -4,6 +4,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+from .claim import EVERY, Claim
 from .metrics import Metrics
 from .schedule import Schedule
 
@@ -15,14 +16,16 @@ class Result:
     """A solver's answer.
 
     ``status`` (docs/decisions.md, "The solve() contract"):
-    ``optimal`` (schedule with proof of its objective: the makespan,
-    unless ``stats["objective"]`` names another), ``feasible`` (schedule, no proof),
+    ``optimal`` (schedule with proof of its ``claim``: the makespan over every schedule,
+    unless the claim names another objective or fewer schedules), ``feasible`` (schedule, no proof),
     ``infeasible`` (proof that no schedule exists at all), ``timeout`` (the time limit ended the
     run, no schedule), ``unsolved`` (the method gave up before its time limit, no schedule, never
     a proof: the reason in ``stats["failure"]``), ``interrupted`` (the user stopped it: the best
     schedule found so far, if any, and the best bound proved are kept), ``error`` (the method
     failed, or its proofs contradict its schedule; see ``stats``). ``lower_bound``: the best
-    proved lower bound on the makespan (None with ``infeasible``, and where none was computed).
+    proved lower bound on the makespan over every schedule (None with ``infeasible``, and where
+    none was computed). ``claim`` (:class:`~bille.instances.claim.Claim`): what the proofs are
+    about, with the bound proved over fewer schedules or of another objective.
     """
 
     method: str
@@ -32,6 +35,7 @@ class Result:
     lower_bound: int | None = None
     time_s: float = 0.0
     stats: dict[str, Any] = field(default_factory=dict, hash=False)
+    claim: Claim = EVERY
 
     def __post_init__(self) -> None:
         if self.status not in STATUSES:
@@ -44,5 +48,6 @@ class Result:
             "metrics": None if self.metrics is None else self.metrics.to_json(),
             "lower_bound": self.lower_bound,
             "time_s": round(self.time_s, 6),
+            "claim": self.claim.to_json(),
             "stats": self.stats,
         }

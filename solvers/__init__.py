@@ -192,16 +192,15 @@ def _raised(classes: dict | None, result: Result) -> dict | None:
     exists."""
     if classes is None or result.status == "infeasible":
         return None
-    from .bounds.classes import RESTRICTIONS, ClassBound, nested
+    from .bounds.classes import ClassBound, nested
 
     out = {key: c if c.empty else ClassBound(key, max(c.lower, result.lower_bound or 0)) for key, c in classes.items()}
     for key, value in {**result.stats.get("class_lower_bounds", {}), **result.stats.get("class_optima", {})}.items():
         if key in out and not out[key].empty:  # proved by an exact search of the class (anytime's)
             out[key] = ClassBound(key, max(out[key].lower, value))
-    restricted = result.stats.get("restricted_lower_bound")
-    for flag, key in RESTRICTIONS.items():
-        if result.stats.get(flag) and restricted is not None and not out[key].empty:
-            out[key] = ClassBound(key, max(out[key].lower, restricted))
+    key, restricted = result.claim.bounds, result.claim.lower
+    if key in out and restricted is not None and not out[key].empty:  # a restricted search's bound
+        out[key] = ClassBound(key, max(out[key].lower, restricted))
     return nested(out)
 
 
@@ -219,7 +218,7 @@ def _checked(instance: Instance, method: str, result: Result, bounds, bound_s: f
     bound known, the class bounds and the schedule's classes, contradictions between proofs
     turned into status ``error``."""
     fields = dict(method=method, status=result.status, schedule=result.schedule, metrics=result.metrics,
-                  lower_bound=_lower(result, bounds), time_s=elapsed, stats=dict(result.stats))
+                  lower_bound=_lower(result, bounds), time_s=elapsed, stats=dict(result.stats), claim=result.claim)
     if bounds is not None:
         fields["stats"].setdefault("bound_parts", bounds.parts)
         fields["stats"]["bound_s"] = round(bound_s, 3)
@@ -263,7 +262,7 @@ def _contradiction(fields: dict, result: Result, bounds, classes: dict | None = 
         said = classes[broken[0]]
         why = (f"a valid {broken[0]} schedule of makespan {makespan}, but "
                + ("that class should have no schedule" if said.empty else f"the class's lower bound is {said.lower}"))
-    elif result.status == "optimal" and "objective" not in stats and result.lower_bound != makespan:
+    elif result.status == "optimal" and result.claim.unconditional and result.lower_bound != makespan:
         why = f"optimal makespan {makespan} claimed with a proof of {result.lower_bound}"
     if why is not None:
         fields["status"] = "error"

@@ -96,9 +96,9 @@ def _classic(instance: Instance, run: Run) -> Result:
     if found.status not in ("timeout", "unsolved"):
         return _told(found, {"method": "cbs", "why": why})
     result = registry.METHODS["lacam"](instance, run=run)
-    proved = found.stats.get("lower_bound_sum_of_costs")
-    if proved is not None:
-        result = dataclasses.replace(result, stats={**result.stats, "lower_bound_sum_of_costs": proved})
+    proved = found.claim.lower  # cbs's claim: the sum of costs, its bound proved
+    if proved is not None and result.status != "optimal":
+        result = dataclasses.replace(result, claim=found.claim)
     return _told(result, {"method": "lacam", "why": f"{why}, ran out of its {share:.0f} s (sum of costs at least "
                                                      f"{proved}); lacam with the rest"})
 

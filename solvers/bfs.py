@@ -6,7 +6,7 @@ optimal makespan; a search that stops early has proved the class's optimum above
 finished. ``cells`` names the class (:mod:`.joint.cells`): ``all`` (the default) searches every
 schedule, so its optimum and its bound are the instance's; ``keep`` and ``no-scaffold`` search
 far fewer states and prove the optimum *of that class*, which the result names (``stats.class``
-and ``stats.objective``) and never gives as the instance's ``lower_bound``. ``add_cells`` widens
+and the result's ``claim``) and never gives as the instance's ``lower_bound``. ``add_cells`` widens
 a class by listed cells.
 
 With ``incumbent`` (a schedule known, ``bille solve --incumbent``), only schedules shorter than it
@@ -27,13 +27,14 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from bille.instances import Instance, OptionError
+from bille.instances.claim import EVERY, Claim
 from bille.instances.limits import address_room, human, memory_budget
 from bille.instances.options import MethodOptions, option
 from bille.instances.result import Result
 from bille.instances.run import INTERRUPTED, TIME_LIMIT, Run
 from bille.instances.schedule import Schedule, bind
 
-from .joint.cells import KINDS, Cells, cells_of
+from .joint.cells import CLASS_KEYS, KINDS, Cells, cells_of
 
 
 # estimated joint states up to which engine=auto runs the Python twin: crowded-2 (1.8 x 10^4,
@@ -89,13 +90,12 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
     """The optimum of the class ``options.cells`` with its proof (module docstring), or what was
     proved when the run's budget, the state cap or the depth cap stopped the search.
 
-    Statuses: ``optimal`` (of the class: ``stats.objective`` names it unless the class is
+    Statuses: ``optimal`` (of the class: the result's ``claim`` names it unless the class is
     ``all``); ``infeasible`` (``all`` exhausted: no schedule exists); ``feasible`` (the incumbent,
     outside the class, and no shorter schedule in it); ``unsolved`` (a class without schedules
     below the incumbent or at all, or a cap reached); ``timeout``; ``interrupted``. The bound a
     stopped search proved is the result's ``lower_bound`` for ``all``, and ``stats.class.lower_bound``
-    for a class (``stats.restricted_lower_bound`` too, where the class is one of
-    :mod:`bille.solvers.bounds.classes`)."""
+    for a class (and the claim's ``lower``)."""
     options = options or Options()
     run = run or Run()
     if options.engine == "python" or (options.engine == "auto" and options.plain and _tiny(instance)):
@@ -149,11 +149,6 @@ def _result(instance: Instance, cells: Cells, out, upper, incumbent, options: Op
     """The search's outcome as a result whose claim names its class (module docstring)."""
     stats = {**out.stats(), "class": {**cells.to_json(), "lower_bound": None}}
     whole = cells.unconditional
-    if not whole:
-        stats["objective"] = f"makespan among {cells.name} (cells={cells.key})"
-        flag = {"keep": "keep_structure", "no-scaffold": "no_scaffold"}.get(cells.kind)
-        if flag is not None:  # a bound on a class holds for every class within it (solvers.classes)
-            stats[flag] = True
     schedule, status, proved = None, None, out.proved
     if out.stop == "goal":
         schedule = Schedule.from_ids(instance, out.ids, meta={"method": "bfs"})
@@ -182,12 +177,20 @@ def _result(instance: Instance, cells: Cells, out, upper, incumbent, options: Op
     if status == "infeasible":
         proved = None
     stats["class"]["lower_bound"] = proved
-    if not whole and proved is not None:
-        stats["restricted_lower_bound"] = proved
     lower = proved if whole else None
     if whole and status == "optimal" and schedule is not None and upper is not None and out.stop == "exhausted":
         lower = upper
-    return Result("bfs", status, schedule, lower_bound=lower, stats=stats, time_s=budget.elapsed())
+    return Result("bfs", status, schedule, lower_bound=lower, stats=stats, time_s=budget.elapsed(),
+                  claim=claim_of(cells, None if whole else proved))
+
+
+def claim_of(cells: Cells, lower: int | None) -> Claim:
+    """The claim of a search of ``cells`` with the class bound ``lower``. Widened, a class holds
+    the kind it widens, so its bound is one of that kind's too (a least makespan over more
+    schedules is at most the least over fewer)."""
+    if cells.unconditional:
+        return EVERY
+    return Claim(among=cells.name, spelled=f"cells={cells.key}", bounds=CLASS_KEYS.get(cells.kind), lower=lower)
 
 
 def _member(instance: Instance, cells: Cells, ids) -> bool:

@@ -2,10 +2,13 @@
 solving otherwise, and anytime with the rest of the time when the brute force runs out."""
 from __future__ import annotations
 
+import dataclasses
+
 import pytest
 
 from bille.instances import load_instance
 from bille.instances.bundled import bundled_path
+from bille.instances.claim import Claim
 from bille.instances.result import Result
 from bille.instances.run import Budget
 from bille.solvers import auto, solve, validate
@@ -89,11 +92,19 @@ def test_classic_mapf_hands_over_to_lacam_when_cbs_runs_out(monkeypatch):
 
     inst = make("T.T.\nTTTT\nT..T", [{"at": [0, 1]}, {"at": [3, 1]}], moveset="point", collisions="classic",
                 robot_goals=[[3, 1], [0, 1]])
-    monkeypatch.setitem(__import__("bille.solvers.registry", fromlist=["METHODS"]).METHODS, "cbs",
-                        lambda instance, options, run: Result("cbs", "timeout", stats={"lower_bound_sum_of_costs": 7}))
+    methods = __import__("bille.solvers.registry", fromlist=["METHODS"]).METHODS
+    lacam = methods["lacam"]
+    monkeypatch.setitem(methods, "cbs",
+                        lambda instance, options, run: Result("cbs", "timeout", claim=Claim("sum-of-costs", lower=7)))
     result = solve(inst, time_limit=20)
-    assert result.stats["auto"]["method"] == "lacam" and result.stats["lower_bound_sum_of_costs"] == 7
-    assert result.schedule is not None and validate(inst, result.schedule).valid
+    # lacam proves its makespan over walking schedules here: its own claim stands
+    assert result.stats["auto"]["method"] == "lacam" and result.status == "optimal"
+    assert result.claim == Claim("makespan", walking_only=True) and validate(inst, result.schedule).valid
+    # a schedule without proof carries the sum-of-costs bound cbs proved
+    monkeypatch.setitem(methods, "lacam", lambda *a, **k: dataclasses.replace(lacam(*a, **k), status="feasible"))
+    result = solve(inst, time_limit=20)
+    assert result.status == "feasible" and result.claim == Claim("sum-of-costs", lower=7)
+    assert validate(inst, result.schedule).valid
 
 
 def test_a_classic_reconfiguration_goes_to_the_brute_force_whatever_its_size(monkeypatch):

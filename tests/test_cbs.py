@@ -6,6 +6,7 @@ import pytest
 
 from bille.instances import InstanceError, OptionError, instance_from_text, load_instance
 from bille.instances.bundled import bundled_path
+from bille.instances.claim import Claim
 from bille.solvers import solve, validate
 from helpers import make
 from refsearch import optimal_soc, walking_makespan
@@ -87,7 +88,7 @@ def test_makespan_matches_the_brute_force(inst):
         return
     assert result.status == "optimal" and validate(inst, result.schedule).valid
     assert result.metrics.makespan == expected
-    proved = result.lower_bound if result.lower_bound is not None else result.stats["restricted_lower_bound"]
+    proved = result.lower_bound if result.lower_bound is not None else result.claim.lower
     assert proved == expected
 
 
@@ -101,7 +102,7 @@ def test_focal_search_stays_within_w_and_its_bound_is_below_the_optimum(focal):
         for w in (1.1, 1.5, 2.0):
             result = solve(inst, "cbs", w=w, focal=focal, **BUDGET)
             assert result.status == "feasible" and validate(inst, result.schedule).valid
-            assert result.stats["lower_bound_sum_of_costs"] <= expected[0] <= result.stats["sum_of_costs"] \
+            assert result.claim.lower <= expected[0] <= result.stats["sum_of_costs"] \
                 <= w * expected[0]
 
 
@@ -125,7 +126,7 @@ def test_a_closed_world_proves_infeasibility_and_names_no_restriction():
     result = solve(inst, "cbs")
     assert result.status == "infeasible"
     ok = solve(make("TTTT", [{"at": [0, 0]}], moveset="point", robot_goals=[[3, 0]]), "cbs")
-    assert ok.stats["objective"] == "sum of costs"
+    assert ok.claim == Claim("sum-of-costs", lower=ok.stats["sum_of_costs"]) and not ok.claim.unconditional
 
 
 def test_an_open_world_proves_nothing_beyond_walking():
@@ -134,7 +135,7 @@ def test_an_open_world_proves_nothing_beyond_walking():
     assert solve(inst, "cbs").status == "unsolved"
     found = solve(make("TTT.", [{"at": [0, 0]}], moveset="point", robot_goals=[[2, 0]]), "cbs", objective="makespan")
     assert found.status == "optimal" and found.lower_bound is None
-    assert found.stats["restricted_lower_bound"] == 2 and "walking only" in found.stats["objective"]
+    assert found.claim.lower == 2 and found.claim.walking_only and found.lower_bound is None
 
 
 def test_a_swap_in_a_corridor_ends_at_the_node_budget_without_a_false_proof():

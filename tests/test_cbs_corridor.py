@@ -95,7 +95,7 @@ def test_where_a_corridor_is_split_the_optimum_is_the_brute_forces():
             for focal in ("conflicts", "ees"):
                 bounded = solve(inst, "cbs", w=1.3, focal=focal, time_limit=None, max_nodes=3000)
                 assert validate(inst, bounded.schedule).valid
-                assert bounded.stats["lower_bound_sum_of_costs"] <= best <= bounded.stats["sum_of_costs"] <= 1.3 * best
+                assert bounded.claim.lower <= best <= bounded.stats["sum_of_costs"] <= 1.3 * best
     assert used >= 10
 
 
@@ -134,4 +134,4 @@ def test_user_movesets_get_no_false_corridor(tmp_path, moveset, grid, starts, go
     for w, focal in ((1.0, "conflicts"), (1.1, "conflicts"), (1.1, "ees")):
         result = solve(inst, "cbs", w=w, focal=focal, time_limit=None, max_nodes=3000)
         assert validate(inst, result.schedule).valid
-        assert result.stats["lower_bound_sum_of_costs"] <= best <= result.stats["sum_of_costs"] <= w * best
+        assert result.claim.lower <= best <= result.stats["sum_of_costs"] <= w * best

@@ -229,7 +229,7 @@ def test_a_restricted_exact_search_starts_at_its_class_bound_and_finds_the_class
             assert result.status in ("unsolved", "infeasible") and result.schedule is None, (inst.name, result.status)
             continue
         assert result.status == "optimal" and result.metrics.makespan == best, (inst.name, result.status, best)
-        assert key in result.stats["classes"] and result.stats["restricted_lower_bound"] == best
+        assert key in result.stats["classes"] and result.claim.lower == best
         ref = reference(inst)  # the bound for every schedule stays one: never the class's
         assert ref.status != "optimal" or result.lower_bound <= ref.lower_bound
         compared += 1
@@ -240,7 +240,7 @@ def test_a_restricted_search_on_a_fixed_structure_or_below_its_class_bound():
     inst = load_instance(bundled_path("point-4"))  # no tile moves: every schedule keeps the structure
     assert solve(inst, "cpsat", keep_structure=True, time_limit=30).status == "optimal"
     capped = solve(BRIDGE, "cpsat", keep_structure=True, max_makespan=10, time_limit=30)
-    assert capped.status == "unsolved" and capped.stats["restricted_lower_bound"] == 13
+    assert capped.status == "unsolved" and capped.claim.lower == 13
     assert "its class needs 13" in capped.stats["failure"] and capped.lower_bound <= 13
 
 
@@ -261,7 +261,7 @@ def test_the_exact_methods_without_scaffold_find_the_class_optimum_of_the_brute_
             continue
         assert result.status == "optimal" and result.metrics.makespan == best, (inst.name, result.status, best)
         assert validate(inst, result.schedule).valid and "no-scaffold" in classes_of(inst, result.schedule)
-        assert result.stats["restricted_lower_bound"] == best and result.lower_bound <= reference(inst).lower_bound
+        assert result.claim.lower == best and result.lower_bound <= reference(inst).lower_bound
         compared += 1
         costlier += best > reference(inst).lower_bound
     assert compared >= 8 and costlier == 2

@@ -77,7 +77,7 @@ def test_single_carry_leaves_out_the_hand_over(method, optimum):
     # carried once, straight from its start to its goal, the tile could not get past a robot
     inst = TINY["handover"]()
     capped = solve(inst, method, single_carry=True, max_makespan=16)
-    assert capped.status == "unsolved" and capped.stats["restricted_lower_bound"] == 17
+    assert capped.status == "unsolved" and capped.claim.lower == 17
     assert "single-carry" in capped.stats["failure"]
     # no bound for the instance: a schedule with a hand-over is shorter (one of 16 steps, from
     # the model of all schedules; the brute force's optimum, 12, costs seconds)
@@ -89,7 +89,7 @@ def test_single_carry_leaves_out_the_hand_over(method, optimum):
     plain = TINY["point-move-tile"]()
     result = solve(plain, method, single_carry=True)
     assert result.status == "optimal" and result.metrics.makespan == optimum("point-move-tile")
-    assert result.stats["single_carry"] and validate(plain, result.schedule).valid
+    assert result.claim.spelled == "single_carry" and validate(plain, result.schedule).valid
 
 
 # the best single-carry schedule takes 6 steps; the optimum, 3, takes a tile out of the
@@ -109,7 +109,7 @@ def test_a_restricted_proof_is_no_bound_for_the_instance(method, restriction):
     assert best.status == "optimal" and best.metrics.makespan == 3
     restricted = solve(inst, method, **{restriction: True})
     assert restricted.status == "optimal" and restricted.metrics.makespan == 6
-    assert restricted.stats["restricted_lower_bound"] == 6 and restriction in restricted.stats["objective"]
+    assert restricted.claim.lower == 6 and restricted.claim.spelled == restriction
     assert restricted.lower_bound <= best.metrics.makespan
     assert validate(inst, restricted.schedule).valid
     with pytest.raises(OptionError, match=restriction):  # the optimum would cap the restricted search

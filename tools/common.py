@@ -8,6 +8,7 @@ from pathlib import Path
 import click
 
 from bille.instances import BilleError, InstanceError, ScheduleError, load_instance
+from bille.instances.claim import shown_status
 from bille.instances.bundled import resolve
 from bille.solvers import load_schedule
 
@@ -251,35 +252,9 @@ def output_folder(out: str) -> Path:
 
 
 def status_text(result) -> str:
-    """The status as the user reads it: ``optimal`` names its objective where it is not the
-    makespan (``optimal (sum of costs)``)."""
-    return shown_status(result.status, result.stats.get("objective"))
-
-
-def status_key(status: str, objective: str | None) -> str:
-    """The status as one word for files (gap.csv, sweeps): ``optimal`` only for the makespan over
-    every schedule; an optimum of another objective or of fewer schedules says which
-    (``optimal-sum-of-costs-walking-only``, ``optimal-in-class``)."""
-    if status != "optimal" or not objective:
-        return status
-    parts = ["optimal"]
-    name = objective.split(" (")[0].split(", then")[0].split(", walking only")[0]
-    if " among " in name or "(cells=" in objective:
-        parts.append("in-class")
-    elif name != "makespan":
-        parts.append(name.replace(" ", "-"))
-    if "walking only" in objective:
-        parts.append("walking-only")
-    return "-".join(parts)
-
-
-def shown_status(status: str, objective: str | None) -> str:
-    """:func:`status_text` from a status and the objective it is optimal for (None: the makespan)."""
-    if status == "optimal" and objective:
-        name = objective.split(" (")[0].split(", then")[0].split(", walking only")[0]
-        restricted = " over walking-only schedules" if "walking only" in objective else ""
-        return f"optimal ({name}{restricted})"
-    return status
+    """The status as the user reads it: ``optimal`` names its claim where it is not the makespan
+    over every schedule (``optimal (sum of costs)``)."""
+    return shown_status(result.status, result.claim)
 
 
 def summary_line(label: str, result) -> str:
@@ -292,10 +267,10 @@ def summary_line(label: str, result) -> str:
         unproved = " (not minimized)" if result.stats.get("tiles_traveled_optimal") is False else ""
         soc = "" if m.sum_of_costs is None else f"sum of costs {m.sum_of_costs}, "
         text += f"; {soc}makespan {m.makespan}, tiles traveled {m.tiles_traveled}{unproved}, waits {m.waits}"
-    proved = result.stats.get("lower_bound_sum_of_costs")
-    if proved is not None and result.status != "optimal":
-        walking = " over walking-only schedules" if "walking only" in (result.stats.get("objective") or "") else ""
-        text += f"; sum of costs >= {proved}{walking} (proved)"
+    claim = result.claim
+    if claim.objective == "sum-of-costs" and claim.lower is not None and result.status != "optimal":
+        walking = " over walking-only schedules" if claim.walking_only else ""
+        text += f"; sum of costs >= {claim.lower}{walking} (proved)"
     if result.lower_bound is not None:
         text += f"; makespan lower bound {result.lower_bound}"
     elif result.status != "infeasible":

@@ -36,10 +36,10 @@ from pathlib import Path
 import yaml
 
 from bille.instances import BilleError, Instance, OptionError
+from bille.instances.claim import EVERY, Claim, shown_status, status_key
 from bille.solvers import METHODS, solve, validate
 from bille.solvers.options import check_options, gather_options
 
-from .common import shown_status, status_key
 from .tables import text_table
 
 FIELDS = ["instance", "method", "status", "makespan", "own_lower_bound", "lower_bound", "best", "tiles_traveled",
@@ -170,16 +170,16 @@ def check_files(instances: list[Instance], files: dict) -> None:
             raise OptionError(f"{label} is valid for none of the instances ({'; '.join(reasons)})")
 
 
-def _row(inst, label, status, metrics=None, lower=None, time_s=None, note="", objective=None, classes=None,
+def _row(inst, label, status, metrics=None, lower=None, time_s=None, note="", claim=None, classes=None,
          class_bounds=None) -> dict:
-    """A row of the report; ``objective`` (not written to the CSV) is what an ``optimal`` status
-    is optimal for when it is not the makespan (``stats.objective``); ``class_bounds`` (not
-    written either) the class bounds the row's solve proved."""
+    """A row of the report; ``claim`` (not written to the CSV, but its status key is) is what an
+    ``optimal`` status is optimal for (:class:`~bille.instances.claim.Claim`); ``class_bounds``
+    (not written either) the class bounds the row's solve proved."""
     return dict(instance=inst.name, method=label, status=status, makespan=metrics.makespan if metrics else None,
                 own_lower_bound=lower, lower_bound=None, best=None,
                 tiles_traveled=metrics.tiles_traveled if metrics else None, time_s=time_s, gap_percent=None,
                 certified_gap_percent=None, classes=None if classes is None else " ".join(classes),
-                class_lower_bound=None, class_gap_percent=None, **{"class": None}, note=note, objective=objective,
+                class_lower_bound=None, class_gap_percent=None, **{"class": None}, note=note, claim=claim or EVERY,
                 own_class_bounds=class_bounds or {})
 
 
@@ -197,11 +197,10 @@ def _solve_row(inst, config: Config, time_limit, threads, progress, schedules) -
         schedules[inst.name, config.label] = result.schedule
     note = (result.stats.get("failure") or result.stats.get("reason") or result.stats.get("violation")
             or result.stats.get("contradiction") or "")
-    objective = result.stats.get("objective")
-    if not note and objective:
-        note = f"optimizes: {objective}"
+    if not note and not result.claim.unconditional:
+        note = f"optimizes: {result.claim.text()}"
     return _row(inst, config.label, result.status, result.metrics, result.lower_bound, round(result.time_s, 3), note,
-                objective, result.stats.get("classes"), result.stats.get("class_bounds"))
+                result.claim, result.stats.get("classes"), result.stats.get("class_bounds"))
 
 
 def _file_row(inst, label, schedule, schedules) -> dict:
@@ -219,7 +218,7 @@ def _certify(inst: Instance, rows: list[dict]) -> None:
     # objective (walking only, sum of costs) or of a restricted set of schedules (single_carry),
     # which names it; solve() turns an unnamed optimum without a matching proof into an error
     proved = {r["makespan"] for r in rows if r["status"] == "optimal" and r["makespan"] is not None
-              and not r["objective"]}
+              and r["claim"].unconditional}
     if len(proved) > 1:  # two exact methods disagree: a bug, never hide it
         raise BilleError(f"{inst.name}: exact methods disagree on the optimal makespan: {sorted(proved)}")
     # a row whose own proofs contradicted its schedule (status error) proves nothing
@@ -290,7 +289,7 @@ def table(rows: list[dict], wide: bool = False) -> list[str]:
     columns = ["instance", "method", "status", "makespan", "LB", "best", "tiles", "time [s]", "gap", "certified"]
     body = []
     for r in rows:
-        status = SHOWN_STATUS.get(r["status"], shown_status(r["status"], r.get("objective")))
+        status = SHOWN_STATUS.get(r["status"], shown_status(r["status"], _claim(r)))
         if not wide and status.startswith("optimal ("):
             status = "optimal*"
         body.append([r["instance"], r["method"], status, r["makespan"], r["lower_bound"], r["best"],
@@ -301,8 +300,8 @@ def table(rows: list[dict], wide: bool = False) -> list[str]:
                      right={"makespan", "LB", "best", "tiles", "time [s]", "gap", "certified"})
     if wide:
         return out
-    starred = {r["method"]: r["objective"] for r in rows if r["status"] == "optimal" and r.get("objective")}
-    out += [f"* {method}: optimal for {objective}" for method, objective in starred.items()]
+    starred = {r["method"]: _claim(r) for r in rows if r["status"] == "optimal" and not _claim(r).unconditional}
+    out += [f"* {method}: optimal for {claim.text()}" for method, claim in starred.items()]
     if any(r["classes"] is not None or r["note"] for r in rows):
         out.append("--wide shows the classes of schedules and the notes (failures, objectives)")
     return out
@@ -336,8 +335,19 @@ def write_csv(rows: list[dict], path: Path) -> None:
     buf = io.StringIO()
     w = csv.DictWriter(buf, fieldnames=FIELDS, extrasaction="ignore")
     w.writeheader()
-    w.writerows({**r, "status": status_key(r["status"], r.get("objective"))} for r in rows)
+    w.writerows({**r, "status": status_key(r["status"], r["claim"])} for r in rows)
     write_atomic(path, buf.getvalue(), BilleError)
+
+
+def json_row(r: dict) -> dict:
+    """A row as ``bille gap --json`` prints it: the status as ``bille solve --json`` has it, with
+    the claim whole (:func:`table` reads such rows back)."""
+    return {**r, "claim": r["claim"].to_json()}
+
+
+def _claim(r: dict) -> Claim:
+    claim = r["claim"]
+    return claim if isinstance(claim, Claim) else Claim.from_json(claim)
 
 
 def _show(v, fmt="{}"):

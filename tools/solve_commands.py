@@ -106,10 +106,11 @@ def _result_lines(inst, method: str, result) -> list[str]:
     lines = [summary_line(method, result)]
     if "auto" in stats:
         lines.append(f"auto chose {stats['auto']['method']}: {stats['auto']['why']}")
-    if "objective" in stats:  # what optimal means when it is not the makespan of every schedule
-        lines.append(f"objective: {stats['objective']}")
-    if "restricted_lower_bound" in stats:
-        lines.append(f"lower bound among those schedules: {stats['restricted_lower_bound']}")
+    claim = result.claim
+    if not claim.unconditional:  # what optimal means when it is not the makespan of every schedule
+        lines.append(f"objective: {claim.text()}")
+        if claim.lower is not None and claim.objective == "makespan":
+            lines.append(f"lower bound among those schedules: {claim.lower}")
     if "class_bounds" in stats:
         from bille.solvers.bounds.classes import report
 
@@ -222,7 +223,7 @@ def gap(instances, methods: tuple[str, ...], schedule_files, time_limit: float, 
 
     from bille.instances import OptionError
 
-    from .gap import Interrupted, check_files, parse_configs, run, summary, table, write_csv
+    from .gap import Interrupted, check_files, parse_configs, json_row, run, summary, table, write_csv
 
     try:
         configs = parse_configs(methods)
@@ -253,7 +254,7 @@ def gap(instances, methods: tuple[str, ...], schedule_files, time_limit: float, 
         if traces:
             record_traces(traces, rrd, quiet=as_json)
     if as_json:
-        print_json({"rows": rows, "csv": csv_path, "interrupted": interrupted})
+        print_json({"rows": [json_row(r) for r in rows], "csv": csv_path, "interrupted": interrupted})
     else:
         for line in table(rows, wide):
             click.echo(line)

@@ -1,11 +1,13 @@
 """``cbs``: conflict-based search as a method of ``solve()``: options, proofs, result."""
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
 
 from bille.instances import Instance, OptionError
+from bille.instances.claim import Claim
 from bille.instances.grid import neighbour_table
 from bille.instances.moveset import Kind
 from bille.instances.options import MethodOptions, option
@@ -140,9 +142,8 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
     problem = JointProblem.of(instance, "cbs")
     agents = agents_of(problem)
     closed = closed_world(instance)
-    restriction = "" if closed else ", walking only (no pick or place)"
-    stats: dict = {"objective": objective.replace("-", " ") + restriction, "w": w, "heuristic": heuristic,
-                   "expanded": 0, "generated": 0, "low_expanded": 0}
+    claim = Claim(objective, walking_only=not closed)
+    stats: dict = {"w": w, "heuristic": heuristic, "expanded": 0, "generated": 0, "low_expanded": 0}
 
     settings = Settings(objective, heuristic, o.prioritize, o.bypass, o.target, o.rectangle,
                         o.corridor and _reversible(instance), w, focal, max_nodes)
@@ -163,16 +164,14 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
         stats["root_cost"] = root.g
         found = tree.run(root)
     except (OutOfBudget, Stopped):
-        stats["lower_bound_" + objective.replace("-", "_")] = tree.lower
         over = budget.expired()
         stats["failure"] = budget.why() if over else f"node limit ({max_nodes} expanded)"
-        return Result("cbs", "timeout" if over else "unsolved", stats=stats)
+        return _proved("timeout" if over else "unsolved", None, tree.lower, claim, stats)
     except KeyboardInterrupt:
-        stats["lower_bound_" + objective.replace("-", "_")] = tree.lower
-        return Result("cbs", "interrupted", stats=stats)
+        return _proved("interrupted", None, tree.lower, claim, stats)
     if found is None:
         return _no_schedule(instance, closed, stats, "no schedule keeps every constraint")
-    result = _result(instance, agents, found, tree, closed, stats)
+    result = _result(instance, agents, found, tree, claim, stats)
     run.events.schedule(result.schedule)
     return result
 
@@ -186,7 +185,15 @@ def _no_schedule(instance: Instance, closed: bool, stats: dict, why: str) -> Res
     return Result("cbs", "unsolved", stats=stats)
 
 
-def _result(instance: Instance, agents: list[Agent], node: Node, tree: Tree, closed: bool, stats: dict) -> Result:
+def _proved(status: str, schedule: Schedule | None, lower: int, claim: Claim, stats: dict) -> Result:
+    """A result with the bound the tree proved: the result's ``lower_bound`` for the makespan over
+    every schedule, the claim's otherwise (the sum of costs, or over walking schedules only)."""
+    if claim.unconditional:
+        return Result("cbs", status, schedule, lower_bound=lower, stats=stats, claim=claim)
+    return Result("cbs", status, schedule, stats=stats, claim=dataclasses.replace(claim, lower=lower))
+
+
+def _result(instance: Instance, agents: list[Agent], node: Node, tree: Tree, claim: Claim, stats: dict) -> Result:
     length = max((p.cost for p in node.paths), default=0)
     ids = np.zeros((len(agents), length), dtype=np.int64)
     for k, path in enumerate(node.paths):
@@ -196,15 +203,7 @@ def _result(instance: Instance, agents: list[Agent], node: Node, tree: Tree, clo
     schedule = Schedule.from_ids(instance, ids, meta={"method": "cbs"})
     soc = sum(p.cost for a, p in zip(agents, node.paths) if a.goal >= 0)
     stats["sum_of_costs"] = soc
-    key = "lower_bound_" + tree.settings.objective.replace("-", "_")
-    stats[key] = min(tree.lower, node.g) if tree.settings.w > 1 else node.g
     optimal = tree.settings.w == 1
-    lower = None
-    if tree.settings.objective == "makespan" and optimal:
-        if closed:
-            stats.pop("objective")  # the makespan over every schedule: the result's lower bound
-            lower = node.g
-        else:
-            stats["restricted_lower_bound"] = node.g
-    return Result("cbs", "optimal" if optimal else "feasible", schedule, lower_bound=lower, stats=stats)
+    return _proved("optimal" if optimal else "feasible", schedule, node.g if optimal else min(tree.lower, node.g),
+                   claim, stats)
 

@@ -32,6 +32,7 @@ from collections import deque
 from dataclasses import dataclass, field
 
 from bille.instances import Instance
+from bille.instances.claim import Claim
 from bille.instances.options import option, refuse
 from bille.instances.run import Budget, Run
 
@@ -93,8 +94,8 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
     moves tiles to the reconfiguration loop with LaCAM* as its motion layer). Without a first
     schedule when the run's budget expires, status ``timeout`` (no run: no limit).
 
-    Status ``optimal`` (with ``stats["objective"]``) when the improvement exhausts the search
-    space, ``feasible`` otherwise; ``unsolved`` when the space holds no walking schedule (a
+    Status ``optimal`` (of ``objective`` over walking schedules: the result's claim) when the
+    improvement exhausts the search space, ``feasible`` otherwise; ``unsolved`` when the space holds no walking schedule (a
     schedule that moves tiles out of the way and back is outside it).
     """
     o = options or Options()
@@ -102,7 +103,7 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
     run = run or Run()
     status, steps, stats = joint_plan(problem, objective=o.objective, budget=run.budget, improve=o.improve,
                                       max_nodes=o.max_nodes, seed=o.seed, progress=run.events.on_progress)
-    result = to_result(instance, "lacam", status, steps, stats=stats)
+    result = to_result(instance, "lacam", status, steps, stats=stats, claim=Claim(o.objective, walking_only=True))
     if result.schedule is not None:
         run.events.schedule(result.schedule)
     return result
@@ -123,7 +124,7 @@ def joint_plan(problem: JointProblem, *, objective: str = "makespan", budget: Bu
     start = budget.now()
     rng = random.Random(seed)
     space = PoseSpace(problem, objective, rng, pinned or {})
-    stats = {"objective": f"{objective}, walking only (no pick or place)"}
+    stats: dict = {}
     if space.classic and space.alike and not pinned and all(c >= 0 for c in problem.goals) \
             and not space.unreachable():
         space.spread(budget.share(SCATTER_SHARE), seed)

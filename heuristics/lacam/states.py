@@ -27,6 +27,7 @@ distance to it.
 """
 from __future__ import annotations
 
+import dataclasses
 import random
 
 import numpy as np
@@ -63,10 +64,13 @@ def plan(instance: Instance, *, run: Run | None = None, improve: float = 0.0,
     per_state = instance.width * instance.height + ROBOT_BYTES * max(1, instance.num_robots)
     cap = min(max_nodes, MEMORY // per_state)
     status, steps, stats = search(space, rng, budget=(run or Run()).budget, improve=improve, max_nodes=cap,
-                                  stats={"objective": "makespan", "search": "whole states"})
+                                  stats={"search": "whole states"})
     if status == "exhausted":
         status = "infeasible"
-    return to_result(instance, method, status, steps, stats=stats)
+    result = to_result(instance, method, status, steps, stats=stats)
+    if status == "optimal":  # every schedule searched: the makespan found is the least there is
+        result = dataclasses.replace(result, lower_bound=len(steps))
+    return result
 
 
 class StateSpace:

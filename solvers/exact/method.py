@@ -65,8 +65,8 @@ class ModelOptions(MethodOptions):
     time with the tiles (:mod:`bille.encodings.reach`), part of ``prune``. ``single_carry``: only
     schedules that carry every tile once, from a start-only cell straight to a goal-only cell
     (no hand-over): the best such makespan (see ``encodings.model.Options``); its proofs hold for
-    those schedules only: ``optimal`` is optimal for ``stats.objective``, their bound is
-    ``stats.restricted_lower_bound``, and ``lower_bound`` stays the instance's static bound (a
+    those schedules only: ``optimal`` is optimal among them, their bound is the result's
+    claim's, and ``lower_bound`` stays the instance's static bound (a
     hand-over may be shorter: Theorem 2's gadget, 24 against 28). ``keep_structure``: only
     schedules that pick and place where the start and the goal differ (no stepping stone, no
     tile of the structure moved aside), with the proofs of ``single_carry`` about those

@@ -16,20 +16,27 @@ from bille.encodings.backend import Backend, Objective, Outcome, open_backend
 from bille.encodings.model import Model, Options, OutOfTime, build
 from bille.encodings.solution import decode
 from bille.instances import Instance
+from bille.instances.claim import EVERY, Claim
 from bille.instances.result import Result
 from bille.instances.run import Budget
 from bille.instances.schedule import Schedule
 
-# the restrictions of the model (encodings.model.Options): what their optimum is optimal for, and
-# what their schedules are called
+# the restrictions of the model (encodings.model.Options): the schedules their optimum is optimal
+# among, and what one of their schedules is called
 RESTRICTIONS = {
-    "single_carry": ("makespan among the schedules that carry every tile once (single_carry)",
-                     "single-carry schedule"),
-    "keep_structure": ("makespan among the schedules that pick and place only where the start and the goal differ "
-                       "(keep_structure)", "schedule that keeps the structure"),
-    "no_scaffold": ("makespan among the schedules that never set a tile down where neither the start nor the goal "
-                    "has one (no_scaffold)", "schedule without scaffold"),
+    "single_carry": ("the schedules that carry every tile once", "single-carry schedule"),
+    "keep_structure": ("the schedules that pick and place only where the start and the goal differ",
+                       "schedule that keeps the structure"),
+    "no_scaffold": ("the schedules that never set a tile down where neither the start nor the goal has one",
+                    "schedule without scaffold"),
 }
+
+
+def restricted(restriction: str, lower: int | None) -> Claim:
+    """The claim of a model under ``restriction`` whose horizons below ``lower`` are refuted; its
+    class is the bounds module's of the same name (:mod:`bille.solvers.bounds.classes`)."""
+    return Claim(among=RESTRICTIONS[restriction][0], spelled=restriction, bounds=restriction.replace("_", "-"),
+                 lower=lower)
 
 
 @dataclass(frozen=True)
@@ -80,10 +87,7 @@ class Search:
         self.stats = {"lower_bound": bounds.lower, "bound_parts": bounds.parts, "horizon_cap": cap,
                       "connectivity": job.options.connectivity, "pruning": job.options.prune_reach, "cuts": 0,
                       "horizons": []}
-        if job.restriction is not None:
-            self.stats[job.restriction] = True
-            self.stats["objective"] = RESTRICTIONS[job.restriction][0]
-            self.stats["restricted_lower_bound"] = self.proved_below
+        self.claim = EVERY if job.restriction is None else restricted(job.restriction, self.proved_below)
 
     def solve(self, backend: Backend, assumptions=(), **objective) -> Outcome:
         """``backend.solve`` within the budget, its cuts counted in ``stats``."""
@@ -105,14 +109,15 @@ class Search:
 
     def result(self, status: str, ids=None, lower: int | None = None) -> Result:
         """The result; a restricted search's proofs (:data:`RESTRICTIONS`) hold for the schedules of
-        the restriction only, so they go to ``stats.restricted_lower_bound`` and the instance
-        keeps its static bound (``optimal`` then means optimal for ``stats.objective``)."""
+        the restriction only, so they go to its claim and the instance keeps its static bound
+        (``optimal`` then means optimal among the restriction's schedules)."""
         if self.job.restriction and lower is not None:
-            self.stats["restricted_lower_bound"] = lower
+            self.claim = restricted(self.job.restriction, lower)
             lower = self.bounds.lower
         method = self.job.method
         schedule = None if ids is None else Schedule.from_ids(self.instance, ids, meta={"method": method})
-        return Result(method, status, schedule, lower_bound=lower, stats=self.stats, time_s=self.budget.elapsed())
+        return Result(method, status, schedule, lower_bound=lower, stats=self.stats, time_s=self.budget.elapsed(),
+                      claim=self.claim)
 
     def timeout(self) -> Result:
         """Time is up: the incumbent if there is one (also one above the horizon cap), with the

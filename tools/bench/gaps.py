@@ -66,7 +66,7 @@ def _class_exact(inst, anytime, seconds: float) -> dict | None:
         return {"lower": bound, "best": own, "optimal": True, "time_s": 0.0}
     exact = solved(solve(inst, "cpsat", no_scaffold=True, time_limit=seconds,
                          max_makespan=None if own is None else own - 1))
-    lower = max(bound, exact.stats.get("restricted_lower_bound") or 0)
+    lower = max(bound, exact.claim.lower or 0)
     found = [m for m in (own, exact.metrics.makespan if exact.schedule is not None else None) if m is not None]
     best = min(found, default=None)
     return {"lower": lower, "best": best, "optimal": best is not None and best <= lower,

@@ -32,6 +32,7 @@ import uuid
 from concurrent.futures import ThreadPoolExecutor, as_completed
 from importlib.metadata import version
 
+from bille.instances.claim import status_key
 from bille.instances.run import Budget
 
 from .spec import Limits, Run
@@ -216,7 +217,7 @@ def solve_in_child(outbox, text: str, method: str, options: dict, limits: Limits
         expansions = next((int(result.stats[k]) for k in ("expansions", "nodes", "states")
                            if isinstance(result.stats.get(k), (int, float))), None)
         said = result.stats.get("violation") or result.stats.get("contradiction") if result.status == "error" else None
-        outbox.send(dict(status=result.status, error=said, makespan=m.makespan if m else None,
+        outbox.send(dict(status=status_key(result.status, result.claim), error=said, makespan=m.makespan if m else None,
                          tiles_traveled=m.tiles_traveled if m else None, lower_bound=result.lower_bound,
                          time_s=round(result.time_s, 4), expansions=expansions, stats=json.dumps(stats, sort_keys=True),
                          schedule=None if result.schedule is None else dump_schedule(result.schedule)))

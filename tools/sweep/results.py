@@ -16,6 +16,7 @@ import json
 from pathlib import Path
 
 from bille.instances import BilleError
+from bille.instances.claim import base_status
 
 COLUMNS = ["key", "instance", "instance_hash", "width", "height", "robots", "tiles", "moved", "method", "options",
            "label", "status", "makespan", "tiles_traveled", "lower_bound", "best_lower_bound", "certified_gap",
@@ -91,7 +92,7 @@ def best_bounds(rows: list[dict]) -> dict[str, int]:
     proved (its own ``lower_bound``; runs that failed or contradicted themselves prove nothing)."""
     best: dict[str, int] = {}
     for r in rows:
-        if r.get("status") in TRUSTED and r.get("lower_bound") is not None:
+        if base_status(r.get("status") or "") in TRUSTED and r.get("lower_bound") is not None:
             best[r["instance_hash"]] = max(best.get(r["instance_hash"], 0), r["lower_bound"])
     return best
 
@@ -120,7 +121,7 @@ def contradictions(rows: list[dict]) -> list[str]:
         lower = best.get(r["instance_hash"])
         if r.get("makespan") is not None and lower is not None and lower > r["makespan"]:
             by = next(o["label"] for o in rows if o["instance_hash"] == r["instance_hash"]
-                      and o.get("status") in TRUSTED and o.get("lower_bound") == lower)
+                      and base_status(o.get("status") or "") in TRUSTED and o.get("lower_bound") == lower)
             said.append(f"{r['instance']}: {by} proved a lower bound of {lower}, above the valid schedule of "
                         f"{r['makespan']} steps of {r['label']}")
     return said
