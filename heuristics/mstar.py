@@ -58,9 +58,7 @@ def method(instance: Instance, options: Options | None = None, run: Run | None =
 
     o = options or Options()
     if instance.is_reconfiguration:
-        return reconfigure.plan(instance, motion="mstar", load_transfer=o.load_transfer, d_tr=o.d_tr,
-                                epsilon=o.epsilon, run=run, max_steps=o.max_steps, active=o.active)
-    o.check_instance(instance)
+        return reconfigure.plan(instance, o, run, motion="mstar")
     return plan(instance, o, run)
 
 

@@ -25,7 +25,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from bille.instances import Instance, OptionError
-from bille.instances.options import option
+from bille.instances.options import option, refuse
 from bille.instances.run import Run
 
 from .loop.loop_options import LoopOptions
@@ -56,6 +56,17 @@ class Options(LoopOptions):
                                          "run")
     priorities: list[int] | None = option(None, help="the initial priority order, robot ids (default: in order)")
 
+    def check_instance(self, instance) -> None:
+        """The loop's (:class:`LoopOptions`); ``priorities`` orders the instance's robots, and
+        ``shift_priorities=false`` is for path planning only."""
+        super().check_instance(instance)
+        m = instance.num_robots
+        if self.priorities is not None and sorted(self.priorities) != list(range(m)):
+            raise OptionError(f"temporal-astar: priorities must order the robot ids 0..{m - 1}, got {self.priorities}")
+        if instance.is_reconfiguration:
+            refuse(self, ("shift_priorities",), "is for path planning only (the loop shifts priorities to get out of "
+                                                "a circle)")
+
     def check(self) -> None:
         super().check()
         if self.horizon > MAX_HORIZON:
@@ -65,15 +76,9 @@ class Options(LoopOptions):
 
 
 def plan(instance: Instance, options: Options | None = None, run: Run | None = None):
-    """Temporal A* (:class:`Options`) on any instance: the reconfiguration loop with Temporal A*
-    as its motion layer (module docstring). When the run's budget expires, status ``timeout``
-    (no run: no limit)."""
+    """Temporal A* (:class:`Options`, checked for the instance by ``solve()`` or the caller) on
+    any instance: the reconfiguration loop with Temporal A* as its motion layer (module
+    docstring). When the run's budget expires, status ``timeout`` (no run: no limit)."""
     from .loop import reconfigure
 
-    o = options or Options()
-    if not instance.is_reconfiguration:
-        o.check_instance(instance)
-    return reconfigure.plan(instance, motion="temporal-astar", load_transfer=o.load_transfer, d_tr=o.d_tr,
-                            epsilon=o.epsilon, horizon=o.horizon, run=run, max_steps=o.max_steps,
-                            max_shifts=o.max_shifts, priorities=o.priorities, active=o.active,
-                            method="temporal-astar", shift_priorities=o.shift_priorities)
+    return reconfigure.plan(instance, options or Options(), run, motion="temporal-astar", method="temporal-astar")

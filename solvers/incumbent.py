@@ -16,6 +16,7 @@ from bille.heuristics import lacam, temporal_astar
 from bille.heuristics.lacam import states as lacam_states
 
 from bille.heuristics.loop import reconfigure
+from bille.heuristics.loop.loop_options import LoopOptions
 from bille.instances import Instance, OptionError
 from bille.instances.metrics import makespan as ids_makespan
 from bille.instances.run import TIME_LIMIT, Budget, Run
@@ -229,8 +230,8 @@ def _run(instance: Instance, how, budget: Budget, improve: bool):
         motion, transfer, sequence, active = how
         if sequence == "derived":
             instance = dataclasses.replace(instance, tasks=None)
-        return reconfigure.plan(instance, motion=motion, load_transfer=transfer, active=active, run=Run(budget),
-                                method=motion)
+        return reconfigure.plan(instance, LoopOptions(load_transfer=transfer, active=active), Run(budget),
+                                motion=motion)
     if how == "lacam":
         return lacam.plan(instance, lacam.Options(improve=min(1.0, budget.left() / 2) if improve else 0.0), Run(budget))
     if instance.collisions == "classic":

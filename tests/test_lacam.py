@@ -193,7 +193,8 @@ def test_whole_state_search_improves_to_the_brute_force_optimum(inst):
     gains = [cost for _, cost in result.stats["improvements"]]
     assert gains == sorted(gains, reverse=True)  # anytime: never worse
     if result.status == "optimal":  # the space was exhausted: the claim is a proof
-        assert steps.metrics.makespan == best.metrics.makespan
+        assert steps.metrics.makespan == best.metrics.makespan == result.lower_bound
+        assert result.claim.unconditional
 
 
 def test_a_loop_out_of_its_share_of_the_time_hands_over_to_the_complete_search(monkeypatch):
@@ -205,7 +206,7 @@ def test_a_loop_out_of_its_share_of_the_time_hands_over_to_the_complete_search(m
 
     given = []
 
-    def stuck(instance, *, run=None, **kw):
+    def stuck(instance, options, run, **kw):
         given.append(run.budget.seconds())
         return Result("lacam", "timeout", stats={"failure": "LaCAM* found no joint plan (timeout)"})
 

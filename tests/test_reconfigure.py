@@ -7,10 +7,12 @@ import pytest
 from bille.heuristics.loop.allocation import Allocation
 from bille.heuristics.loop.goals import Goals
 from bille.heuristics.loop.manipulation import Manipulation
+from bille.heuristics.loop import reconfigure
 from bille.heuristics.loop.motion import MOTIONS, TemporalAStar
-from bille.heuristics.loop.reconfigure import Leg, Loop, LoopState, plan
-from bille.heuristics.loop.transfer import LoadTransfer
+from bille.heuristics.loop.reconfigure import Leg, Loop, LoopState
 from bille.heuristics.loop.sequence import NoSequence, SequenceError, check, derive, sequence_of
+from bille.heuristics.loop.transfer import LoadTransfer
+from bille.heuristics.temporal_astar import Options as LoopRecord
 from bille.instances import OptionError, instance_from_text, load_instance
 from bille.instances.bundled import bundled_path
 from bille.instances.generators.random import random_reconfiguration
@@ -22,6 +24,13 @@ from bille.instances.schedule import Schedule
 from bille.solvers import solve, validate
 from helpers import make, manipulations
 from bille.tools.cli import main
+
+
+def plan(inst, motion="temporal-astar", run=None, **options):
+    """The loop with a motion layer and Temporal A*'s options record (the loop's and its own)."""
+    record = LoopRecord(**options)
+    record.check_instance(inst)
+    return reconfigure.plan(inst, record, run, motion=motion)
 
 
 def cli(capsys, *argv):
@@ -320,7 +329,7 @@ def test_a_motion_layer_alone_plans_a_step_the_rules_accept(name):
     for robot, k in Allocation([0, 1]).decide(s):
         s.assign(robot, k)
     stats = {k: 0 for k in ("priority_shifts", "replans", "cautious_steps", "expanded", "goals_dropped")}
-    layer = MOTIONS[name](epsilon=1.0, horizon=5)
+    layer = MOTIONS[name](LoopRecord())
     layer.start(inst, stats)
     goals = Goals(inst, Manipulation(inst, s), parking=layer.parking).all(s)
     assert layer.name == name and all(g is not None for g in goals)
@@ -359,7 +368,7 @@ def test_an_early_pick_keeps_the_tile_a_later_place_stands_on():
     # job 6 picks (9, 8), the tile a robot stands on to place job 5's tile at (11, 8); picked
     # early, it left both robots carrying tiles that neither could place (a deadlock)
     inst = random_reconfiguration(15, 15, 60, 2, 10, seed=2)
-    loop = Loop(inst, horizon=10)
+    loop = Loop(inst, LoopRecord(horizon=10))
     w = inst.width
     assert [(j.pick % w, j.pick // w, j.place % w, j.place // w) for j in loop.s.jobs[5:7]] == [
         (6, 8, 11, 8), (9, 8, 12, 8)]
@@ -413,8 +422,11 @@ def test_only_the_active_robots_take_jobs(motion, name):
 
 def test_active_names_robots_of_the_instance():
     inst = bundled("corridor-2")
-    for active in ([2], [], [-1], [True], "0,1"):
+    for active in ([2], [], [-1]):
         with pytest.raises(OptionError, match="active must name"):
+            plan(inst, active=active)
+    for active in ([True], "0,1"):
+        with pytest.raises(OptionError, match="active"):
             plan(inst, active=active)
     with pytest.raises(OptionError, match="option active works in the reconfiguration loop only"):
         solve(bundled("compare-2"), "temporal-astar", active=[0])

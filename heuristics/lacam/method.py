@@ -26,7 +26,6 @@ def method(instance: Instance, options: Options | None = None, run: Run | None =
     planning; ``improve``, ``max_nodes`` and ``seed`` for the searches over configurations."""
     o = options or Options()
     if not instance.is_reconfiguration:
-        o.check_instance(instance)
         return plan(instance, o, run)
     from ..loop import reconfigure
     from . import states  # (and scipy's graph routines) for an instance that moves tiles
@@ -34,11 +33,8 @@ def method(instance: Instance, options: Options | None = None, run: Run | None =
     if instance.collisions == "classic":
         raise OptionError(f"lacam: instance '{instance.name}' moves tiles under classic collisions; "
                           "the reconfiguration loop plans under the Bill-E rule only")
-    o.check_instance(instance)
     run = run or Run()
-    loop = reconfigure.plan(instance, motion="lacam", load_transfer=o.load_transfer, d_tr=o.d_tr,
-                            run=run.part(run.budget.share(LOOP_SHARE)), max_steps=o.max_steps, active=o.active,
-                            method="lacam")
+    loop = reconfigure.plan(instance, o, run.part(run.budget.share(LOOP_SHARE)), motion="lacam")
     if loop.status not in ("unsolved", "timeout") or run.budget.expired():
         return loop
     whole = states.plan(instance, run=run, improve=o.improve, max_nodes=o.max_nodes, seed=o.seed)

@@ -162,12 +162,13 @@ class TemporalAStar:
 
 
 MOTIONS: dict[str, Callable[..., Motion]] = {
-    "temporal-astar": lambda *, epsilon=1.0, horizon=5: TemporalAStar(horizon=horizon, epsilon=epsilon),
-    "mstar": lambda *, epsilon=1.0, horizon=5: MStar(epsilon=epsilon),
-    "lacam": lambda *, epsilon=1.0, horizon=5: LaCAM(),
+    "temporal-astar": lambda o: TemporalAStar(horizon=o.horizon, epsilon=o.epsilon),
+    "mstar": lambda o: MStar(epsilon=o.epsilon),
+    "lacam": lambda o: LaCAM(),
 }
-"""Motion layer by name: ``MOTIONS[name](epsilon=..., horizon=...)`` makes one for a run (each
-takes the options it has: ``H`` is Temporal A*'s, ``epsilon`` Temporal A*'s and M*'s)."""
+"""Motion layer by name: ``MOTIONS[name](options)`` makes one for a run from the method's options
+(:class:`.loop_options.LoopOptions` or a record holding it; each takes what it has: ``horizon``
+is Temporal A*'s, ``epsilon`` Temporal A*'s and M*'s)."""
 
 
 __all__ = ["MOTIONS", "LaCAM", "MStar", "Motion", "TemporalAStar"]

@@ -58,6 +58,7 @@ from ..joint import check_tables, to_result
 from .allocation import Allocation
 from .goals import Goals
 from .legs import Leg, Transfer
+from .loop_options import LoopOptions
 from .loopstate import LoopState
 from .manipulation import Manipulation
 from .motion import MOTIONS, Motion
@@ -71,31 +72,23 @@ WALKING = ("horizon", "epsilon", "steps", "priority_shifts", "replans", "expande
            "plan_ms_max")  # the counts of path planning (no jobs)
 
 
-def plan(instance: Instance, *, motion: str | Motion = "temporal-astar", load_transfer: bool = False,
-         d_tr: int = 5, epsilon: float = 1.0, horizon: int = 5, run: Run | None = None,
-         max_steps: int | None = None, max_shifts: int | None = None, priorities: list[int] | None = None,
-         active: list[int] | None = None, method: str | None = None, shift_priorities: bool = True):
+def plan(instance: Instance, options: LoopOptions | None = None, run: Run | None = None, *,
+         motion: str | Motion = "temporal-astar", method: str | None = None):
     """Run the reconfiguration loop (module docstring); returns a
     :class:`~bille.instances.result.Result` named ``method`` (default: the motion layer's name).
 
-    ``motion``: a name of :data:`.motion.MOTIONS` (``temporal-astar``, ``mstar``, ``lacam``),
-    made with ``epsilon`` and ``horizon``, or a motion layer (:class:`.motion.Motion`) with its
-    own options; ``load_transfer`` and ``d_tr``: equations (1)-(3); ``epsilon``, ``horizon``,
-    ``priorities`` (the initial ``Q``): as for Temporal A*; ``max_steps``: the step bound
-    (default: ten times the summed Manhattan carries plus ``W + H`` per job, at least 200);
-    ``max_shifts``: priority shifts allowed when going round in circles (default ``4 m^2 + 4
-    jobs``); ``active``: the robots that take jobs (default: all); the others only keep out of
-    the way, and one that carries a tile at the start still delivers it; ``run``: the run
-    context (when its budget expires, status ``timeout``; default: no limit);
-    ``shift_priorities``: False keeps ``Q`` fixed (path planning only, for comparison).
+    ``options``: the method's record (:class:`.loop_options.LoopOptions`, or Temporal A*'s, M*'s
+    or LaCAM*'s, which hold it), checked for the instance by ``solve()`` or the caller
+    (``options.check_instance``), not again here. ``motion``: a name of :data:`.motion.MOTIONS`
+    (``temporal-astar``, ``mstar``, ``lacam``), made from ``options``, or a motion layer
+    (:class:`.motion.Motion`) with its own options. ``run``: the run context (when its budget
+    expires, status ``timeout``; default: no limit).
     """
     name = motion if isinstance(motion, str) else motion.name
     run = run or Run()
     budget = run.budget
     try:
-        loop = Loop(instance, motion=motion, load_transfer=load_transfer, d_tr=d_tr, epsilon=epsilon,
-                    horizon=horizon, budget=budget, max_steps=max_steps, max_shifts=max_shifts,
-                    priorities=priorities, active=active, method=method, shift_priorities=shift_priorities)
+        loop = Loop(instance, options, motion=motion, budget=budget, method=method)
     except NoSequence as exc:  # the loop gives up before its first step
         status = "timeout" if budget.expired() else "unsolved"
         return to_result(instance, method or name, status, None, stats={"failure": str(exc)})
@@ -104,15 +97,6 @@ def plan(instance: Instance, *, motion: str | Motion = "temporal-astar", load_tr
     if result.schedule is not None:
         run.events.schedule(result.schedule)
     return result
-
-
-def _active(active, m: int, name: str) -> list[int]:
-    if isinstance(active, int) and not isinstance(active, bool):
-        active = [active]
-    if active is not None and (not isinstance(active, (list, tuple)) or not active or not all(
-            isinstance(i, int) and not isinstance(i, bool) and 0 <= i < m for i in active)):
-        raise OptionError(f"{name}: active must name some of the robot ids 0..{m - 1}, got {active!r}")
-    return list(range(m)) if active is None else sorted(set(active))
 
 
 class Stop(Exception):
@@ -124,36 +108,22 @@ class Stop(Exception):
         self.reason, self.status = reason, status
 
 
-def _checked(name: str, motion, epsilon: float, horizon: int, d_tr: int, priorities, active, m: int):
-    """The loop's options checked (OptionError naming the first wrong one): the initial
-    priorities ``Q`` and the robots that take jobs."""
-    if isinstance(motion, str) and motion not in MOTIONS:
-        raise OptionError(f"unknown motion planner '{motion}' (expected one of: {', '.join(MOTIONS)})")
-    if epsilon < 1:
-        raise OptionError(f"{name}: epsilon must be >= 1, got {epsilon}")
-    if horizon < 1:
-        raise OptionError(f"{name}: the horizon H must be >= 1, got {horizon}")
-    if d_tr < 0:
-        raise OptionError(f"{name}: d_tr must be >= 0, got {d_tr}")
-    Q = list(range(m)) if priorities is None else list(priorities)
-    if sorted(Q) != list(range(m)):
-        raise OptionError(f"{name}: priorities must order the robot ids 0..{m - 1}, got {priorities}")
-    return Q, _active(active, m, name)
-
-
 class Loop:
     """One run: the state :attr:`s`, the parts (:attr:`allocation`, :attr:`transfer` (None
     without load transfer), :attr:`manipulation`, :attr:`goals`, :attr:`motion`) and the
     counts :attr:`stats`; :meth:`run` drives them (options as for :func:`plan`)."""
 
-    def __init__(self, instance: Instance, *, motion: str | Motion = "temporal-astar", load_transfer: bool = False,
-                 d_tr: int = 5, epsilon: float = 1.0, horizon: int = 5, budget: Budget | None = None,
-                 max_steps: int | None = None, max_shifts: int | None = None,
-                 priorities: list[int] | None = None, active: list[int] | None = None,
-                 method: str | None = None, shift_priorities: bool = True) -> None:
+    def __init__(self, instance: Instance, options: LoopOptions | None = None, *,
+                 motion: str | Motion = "temporal-astar", budget: Budget | None = None,
+                 method: str | None = None) -> None:
+        o = options or LoopOptions()
         m = instance.num_robots
         name = method or (motion if isinstance(motion, str) else motion.name)
-        Q, active = _checked(name, motion, epsilon, horizon, d_tr, priorities, active, m)
+        if isinstance(motion, str) and motion not in MOTIONS:
+            raise OptionError(f"unknown motion planner '{motion}' (expected one of: {', '.join(MOTIONS)})")
+        Q = list(range(m)) if o.priorities is None else list(o.priorities)
+        active = list(range(m)) if o.active is None else sorted(set(o.active))
+        max_steps = o.max_steps
         self.instance = instance
         self.budget = budget or Budget()
         self.progress = None  # the run's progress receiver: told the steps planned every PROGRESS_STEPS
@@ -162,9 +132,7 @@ class Loop:
             check_tables(instance, name)
         elif m == 0:
             raise OptionError(f"instance '{instance.name}' has no robots to move its tiles")
-        elif not shift_priorities:
-            raise OptionError(f"{name}: shift_priorities=false is for path planning only")
-        self.shift_priorities = shift_priorities
+        self.shift_priorities = o.shift_priorities
         jobs = [] if self.path_planning else sequence_of(instance, budget=self.budget)
         self.s = LoopState.start(instance, jobs, Q)
         jobs = self.s.jobs
@@ -173,21 +141,21 @@ class Loop:
                       for j in jobs if j.pick is not None)
         # default step bound: ten times the carries plus a crossing of the grid per job
         self.max_steps = max(200, 10 * (carries + len(jobs) * (w + h))) if max_steps is None else max_steps
-        self.max_shifts = 4 * m * m + 4 * len(jobs) if max_shifts is None else max_shifts
+        self.max_shifts = 4 * m * m + 4 * len(jobs) if o.max_shifts is None else o.max_shifts
         self.max_drops = len(jobs)  # temporary placements per run
-        self.stats: dict = {"motion": name, "load_transfer": load_transfer, "d_tr": d_tr, "horizon": horizon,
-                            "epsilon": epsilon, "jobs": len(jobs), "steps": 0, "relays": 0, "swaps": 0,
+        self.stats: dict = {"motion": name, "load_transfer": o.load_transfer, "d_tr": o.d_tr, "horizon": o.horizon,
+                            "epsilon": o.epsilon, "jobs": len(jobs), "steps": 0, "relays": 0, "swaps": 0,
                             "pairs_considered": 0, "deferred_manipulations": 0, "priority_shifts": 0,
                             "circle_shifts": 0, "cautious_steps": 0, "replans": 0, "expanded": 0, "backtracks": 0,
                             "goals_dropped": 0, "drops": 0, "evictions": 0,
                             "plan_ms_mean": 0.0, "plan_ms_max": 0.0}
         if self.path_planning:  # the counts of walking alone
             self.stats = {k: self.stats[k] for k in WALKING}
-        self.motion: Motion = MOTIONS[motion](epsilon=epsilon, horizon=horizon) if isinstance(motion, str) else motion
+        self.motion: Motion = MOTIONS[motion](o) if isinstance(motion, str) else motion
         # the paper's rules: the motion layer's replans spend the same budget (none with Q fixed)
-        self.motion.start(instance, self.stats, (self.max_shifts if shift_priorities else 0) if self.path_planning else None)
+        self.motion.start(instance, self.stats, (self.max_shifts if o.shift_priorities else 0) if self.path_planning else None)
         self.allocation = Allocation(active)
-        self.transfer = LoadTransfer(instance, d_tr, self.stats) if load_transfer else None
+        self.transfer = LoadTransfer(instance, o.d_tr, self.stats) if o.load_transfer else None
         self.manipulation = Manipulation(instance, self.s, self.stats)
         self.goals = Goals(instance, self.manipulation, parking=self.motion.parking, size=2 * m)
         if self.path_planning and max_steps is None:

@@ -53,9 +53,10 @@ def digest(value) -> str:
 def fingerprint(inst, motion: str, horizon: int, transfer: bool) -> dict:
     import numpy as np
 
+    from bille.heuristics import temporal_astar
     from bille.heuristics.loop import reconfigure
 
-    result = reconfigure.plan(inst, motion=motion, horizon=horizon, load_transfer=transfer)
+    result = reconfigure.plan(inst, temporal_astar.Options(horizon=horizon, load_transfer=transfer), motion=motion)
     stats = {k: v for k, v in result.stats.items() if k not in TIMINGS}
     ids = None if result.schedule is None else bind(inst, result.schedule)
     return {"status": result.status, "failure": result.stats.get("failure"),
