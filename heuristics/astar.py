@@ -14,6 +14,7 @@ import itertools
 from dataclasses import dataclass
 
 from bille.instances import Instance
+from bille.instances.failure import CANNOT_REACH, cap
 from bille.instances.options import MethodOptions, option
 from bille.instances.run import Run
 
@@ -46,8 +47,7 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
     stats = {"epsilon": epsilon, "expanded": 0, "generated": 0}
     if problem.unreachable():
         stats["unreachable"] = problem.unreachable()
-        stats["failure"] = "unreachable"
-        return to_result(instance, "astar", "unsolved", None, stats=stats, claim=CLAIM)
+        return to_result(instance, "astar", "unsolved", None, stats=stats, claim=CLAIM, failure=CANNOT_REACH)
 
     m = instance.num_robots
     root = (problem.start, (0,) * m)
@@ -70,8 +70,7 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
             return to_result(instance, "astar", status, unwind(parent, key), stats=stats, claim=CLAIM)
         stats["expanded"] += 1
         if stats["expanded"] > max_expansions:
-            stats["failure"] = "expansion cap"
-            return to_result(instance, "astar", "unsolved", None, stats=stats, claim=CLAIM)
+            return to_result(instance, "astar", "unsolved", None, stats=stats, claim=CLAIM, failure=cap("expansion cap"))
         try:
             if budget.expired():
                 raise OutOfTime
@@ -88,7 +87,5 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
                 stats["generated"] += 1
                 heapq.heappush(frontier, (g[0] + epsilon * h[0], g[1] + h[1], next(counter), child))
         except OutOfTime:  # before the expansion, or within it (many robots: millions of children)
-            stats["failure"] = budget.why()
-            return to_result(instance, "astar", "timeout", None, stats=stats, claim=CLAIM)
-    stats["failure"] = NO_WALK
-    return to_result(instance, "astar", "unsolved", None, stats=stats, claim=CLAIM)
+            return to_result(instance, "astar", "timeout", None, stats=stats, claim=CLAIM, failure=budget.why())
+    return to_result(instance, "astar", "unsolved", None, stats=stats, claim=CLAIM, failure=NO_WALK)

@@ -16,6 +16,7 @@ import numpy as np
 
 from bille.instances import Instance, OptionError
 from bille.instances.claim import EVERY, Claim
+from bille.instances.failure import Failure, no_schedule
 from bille.instances.limits import CHECK_EVERY, check_budget
 from bille.instances.result import Result
 from bille.instances.run import Budget
@@ -157,7 +158,7 @@ class JointProblem:
         return total, tuple(new)
 
 
-NO_WALK = "no walking schedule on the fixed structure (a schedule that moves tiles may exist)"
+NO_WALK = no_schedule("no walking schedule on the fixed structure (a schedule that moves tiles may exist)")
 
 
 def table_bytes(instance: Instance) -> int:
@@ -191,14 +192,14 @@ def schedule_ids(instance: Instance, steps: list[tuple[int, ...]]) -> np.ndarray
 
 
 def to_result(instance: Instance, method: str, status: str, steps: list | None, *, stats: dict,
-              claim: Claim = EVERY):
+              claim: Claim = EVERY, failure: Failure | None = None):
     """A :class:`~bille.instances.result.Result` from a list of joint actions (or None). The
     planners prove no lower bound: ``solve()`` adds the static one; ``claim``: what an
-    ``optimal`` status is optimal for."""
+    ``optimal`` status is optimal for; ``failure``: why there is no schedule."""
     schedule = None
     if steps is not None:
         schedule = Schedule.from_ids(instance, schedule_ids(instance, steps), meta={"method": method})
-    return Result(method, status, schedule, stats=stats, claim=claim)
+    return Result(method, status, schedule, stats=stats, claim=claim, failure=failure)
 
 
 def unwind(parent: dict, key) -> list:

@@ -27,6 +27,7 @@ import itertools
 from dataclasses import dataclass
 
 from bille.instances import Instance
+from bille.instances.failure import CANNOT_REACH, Failure, cap
 from bille.instances.options import option
 from bille.instances.run import Budget, Run
 
@@ -98,6 +99,7 @@ class _MStar:
         self.expanded_as: dict = {}
         self.counter = itertools.count()
         self.frontier: list = []
+        self.failure: Failure | None = None
 
     # ---- bookkeeping -------------------------------------------------------------------------
 
@@ -138,12 +140,12 @@ class _MStar:
         problem, stats, instance = self.problem, self.stats, self.instance
         if problem.unreachable():
             stats["unreachable"] = problem.unreachable()
-            stats["failure"] = "unreachable"
-            return to_result(instance, "mstar", "unsolved", None, stats=stats, claim=CLAIM)
+            return to_result(instance, "mstar", "unsolved", None, stats=stats, claim=CLAIM, failure=CANNOT_REACH)
         status, steps = self.search()
-        return to_result(instance, "mstar", status, steps, stats=stats, claim=CLAIM)
+        return to_result(instance, "mstar", status, steps, stats=stats, claim=CLAIM, failure=self.failure)
 
     def search(self) -> tuple[str, list | None]:
+        """``(status, joint actions or None)``; without a schedule, why in :attr:`failure`."""
         problem, stats = self.problem, self.stats
         root = (problem.start, (0,) * len(problem.walks))
         self.g[root], self.parent[root], self.collision[root], self.back[root] = (0, 0), None, frozenset(), set()
@@ -152,7 +154,7 @@ class _MStar:
             *_, node = heapq.heappop(self.frontier)
             if node[0] == "od":  # a partial step: many of them per state with many coupled robots
                 if self.budget.expired():
-                    stats["failure"] = self.budget.why()
+                    self.failure = self.budget.why()
                     return "timeout", None
                 self.expand_partial(node)
                 continue
@@ -165,16 +167,16 @@ class _MStar:
                 return ("optimal" if self.epsilon == 1 else "feasible"), unwind(self.parent, node)
             stats["expanded"] += 1
             if stats["expanded"] > self.max_expansions:
-                stats["failure"] = "expansion cap"
+                self.failure = cap("expansion cap")
                 return "unsolved", None
             try:
                 if self.budget.expired():
                     raise OutOfTime
                 self.expand(node)
             except OutOfTime:
-                stats["failure"] = self.budget.why()
+                self.failure = self.budget.why()
                 return "timeout", None
-        stats["failure"] = NO_WALK
+        self.failure = NO_WALK
         return "unsolved", None
 
     def expand(self, key):

@@ -16,7 +16,7 @@ walk at all (not even waiting), it moves up one place in ``Q`` and the step is p
 the robots come back to a joint state they were in before with the same ``Q``, they are going
 round in circles, and the lowest-priority robot not at its goal moves up one place. Both count
 against a budget of priority shifts; when it is spent, or the step bound is reached, the planner
-gives up with status ``unsolved`` and the reason in ``stats["failure"]`` (``timeout`` when the
+gives up with status ``unsolved`` and the reason in the result's ``failure`` (``timeout`` when the
 time limit ended it). Temporal A* is not complete: giving up is not a proof that no schedule
 exists.
 """

@@ -5,6 +5,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from .claim import EVERY, Claim
+from .failure import Failure
 from .metrics import Metrics
 from .schedule import Schedule
 
@@ -20,12 +21,14 @@ class Result:
     unless the claim names another objective or fewer schedules), ``feasible`` (schedule, no proof),
     ``infeasible`` (proof that no schedule exists at all), ``timeout`` (the time limit ended the
     run, no schedule), ``unsolved`` (the method gave up before its time limit, no schedule, never
-    a proof: the reason in ``stats["failure"]``), ``interrupted`` (the user stopped it: the best
+    a proof: the reason in ``failure``), ``interrupted`` (the user stopped it: the best
     schedule found so far, if any, and the best bound proved are kept), ``error`` (the method
     failed, or its proofs contradict its schedule; see ``stats``). ``lower_bound``: the best
     proved lower bound on the makespan over every schedule (None with ``infeasible``, and where
     none was computed). ``claim`` (:class:`~bille.instances.claim.Claim`): what the proofs are
-    about, with the bound proved over fewer schedules or of another objective.
+    about, with the bound proved over fewer schedules or of another objective. ``failure``
+    (:class:`~bille.instances.failure.Failure`): why a run without its answer ended (its
+    time limit, Ctrl-C, a cap, a heuristic stuck, ...), None otherwise.
     """
 
     method: str
@@ -36,6 +39,7 @@ class Result:
     time_s: float = 0.0
     stats: dict[str, Any] = field(default_factory=dict, hash=False)
     claim: Claim = EVERY
+    failure: Failure | None = None
 
     def __post_init__(self) -> None:
         if self.status not in STATUSES:
@@ -49,5 +53,6 @@ class Result:
             "lower_bound": self.lower_bound,
             "time_s": round(self.time_s, 6),
             "claim": self.claim.to_json(),
+            "failure": None if self.failure is None else self.failure.to_json(),
             "stats": self.stats,
         }

@@ -30,6 +30,8 @@ import time
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
+from .failure import Failure
+
 
 class _Flag:
     """The cancel flag of one run, shared by its budgets."""
@@ -40,8 +42,8 @@ class _Flag:
         self.set = False
 
 
-# why a budget stopped a search (:meth:`Budget.why`): the failures a method writes for it
-TIME_LIMIT, INTERRUPTED = "time limit", "interrupted"
+# why a budget stopped a search (:meth:`Budget.why`): the failures a method gives for it
+TIME_LIMIT, INTERRUPTED = Failure("time-limit", "time limit"), Failure("interrupted", "interrupted")
 
 
 class Budget:
@@ -87,9 +89,9 @@ class Budget:
         """Whether the time is spent or the run cancelled: where a search stops."""
         return self._flag.set or (self.end is not None and self.clock() >= self.end)
 
-    def why(self) -> str:
+    def why(self) -> Failure:
         """Why a search that stopped at its budget stopped: :data:`INTERRUPTED` (cancelled, Ctrl-C)
-        or :data:`TIME_LIMIT`; the failure a method writes (``stats.failure``)."""
+        or :data:`TIME_LIMIT`; the failure a method gives (``Result.failure``)."""
         return INTERRUPTED if self._flag.set else TIME_LIMIT
 
     def child(self, seconds: float | None = None) -> Budget:

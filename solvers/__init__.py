@@ -11,10 +11,11 @@ from __future__ import annotations
 import dataclasses as _dataclasses
 
 from bille.instances import Instance, OptionError
+from bille.instances.failure import Failure
 from bille.instances.interrupts import cancelling as _cancelling
 from bille.instances.metrics import Metrics, metrics
 from bille.instances.result import STATUSES, Result
-from bille.instances.run import Budget, Events, Run
+from bille.instances.run import INTERRUPTED, Budget, Events, Run
 from bille.instances.schedule import Schedule, bind, dump_schedule, load_schedule, save_schedule, schedule_from_text
 
 from .options import check_options
@@ -127,9 +128,9 @@ def _run(instance: Instance, record, options, budget: Budget, told: Events, boun
             internal["bounds"] = bounds
         before = "computing the lower bound" if record.bound else "before the method ran"
         if budget.cancelled:
-            result = Result(method, "interrupted", stats={"failure": f"interrupted {before}"})
+            result = Result(method, "interrupted", failure=Failure("interrupted", f"interrupted {before}"))
         elif budget.expired():
-            result = Result(method, "timeout", stats={"failure": f"the time limit ran out {before}"})
+            result = Result(method, "timeout", failure=Failure("time-limit", f"the time limit ran out {before}"))
         else:
             result = record(instance, options, Run(budget, events), **internal)
     except KeyboardInterrupt:  # the method let it through: what it told before is kept
@@ -156,7 +157,7 @@ class _Kept:
 
     def result(self, instance: Instance, method: str) -> Result:
         schedule = None if self.ids is None else Schedule.from_ids(instance, self.ids, meta={"method": method})
-        return Result(method, "interrupted", schedule, lower_bound=self.lower)
+        return Result(method, "interrupted", schedule, lower_bound=self.lower, failure=INTERRUPTED)
 
 
 def _both(first, second):
@@ -218,7 +219,8 @@ def _checked(instance: Instance, method: str, result: Result, bounds, bound_s: f
     bound known, the class bounds and the schedule's classes, contradictions between proofs
     turned into status ``error``."""
     fields = dict(method=method, status=result.status, schedule=result.schedule, metrics=result.metrics,
-                  lower_bound=_lower(result, bounds), time_s=elapsed, stats=dict(result.stats), claim=result.claim)
+                  lower_bound=_lower(result, bounds), time_s=elapsed, stats=dict(result.stats), claim=result.claim,
+                  failure=result.failure)
     if bounds is not None:
         fields["stats"].setdefault("bound_parts", bounds.parts)
         fields["stats"]["bound_s"] = round(bound_s, 3)

@@ -75,7 +75,7 @@ def plan(instance: Instance, options: AutoOptions | None = None, run: Run | None
         if found.status not in ("timeout", "unsolved"):
             return _told(found, {"method": "bfs", "why": why})
         lower = found.lower_bound
-        chosen = {"method": "anytime", "why": f"{why}, ran out of its {share:.0f} s ({found.stats.get('failure')}, "
+        chosen = {"method": "anytime", "why": f"{why}, ran out of its {share:.0f} s ({found.failure}, "
                                                f"optimum above {lower - 1} steps); anytime with the rest"}
     if bounds is not None and lower is not None and lower > bounds.lower:
         bounds = dataclasses.replace(bounds, lower=lower, parts={**bounds.parts, "brute force": lower})

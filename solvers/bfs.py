@@ -28,6 +28,7 @@ from dataclasses import dataclass
 
 from bille.instances import Instance, OptionError
 from bille.instances.claim import EVERY, Claim
+from bille.instances.failure import cap, no_schedule
 from bille.instances.limits import address_room, human, memory_budget
 from bille.instances.options import MethodOptions, option
 from bille.instances.result import Result
@@ -40,6 +41,9 @@ from .joint.cells import CLASS_KEYS, KINDS, Cells, cells_of
 # estimated joint states up to which engine=auto runs the Python twin: crowded-2 (1.8 x 10^4,
 # 133 states stored) takes it 0.004 s, the compiled search 0.5 s with its loading
 PYTHON_SMALL = 50_000
+# of the time limit, the plain search's before deepening (lt-1's keep class takes it 1.4 s; lt-7's,
+# three robots, reaches depth 8 of 13 in a minute plain, and deepening decides it in 30 s)
+PLAIN_SHARE = 0.2
 
 
 @dataclass(frozen=True)
@@ -55,7 +59,9 @@ class Options(MethodOptions):
     the compiled code takes about 0.4 s, more than the twin needs there), compiled otherwise.
     ``direction``: ``forward`` from the start, ``both`` from the start and back from the goal
     states (:mod:`.joint.bidirectional`), ``auto`` both where the goal states can be listed and no
-    incumbent is given (its pruning works forward)."""
+    incumbent is given (its pruning works forward). ``deepen``: where no incumbent is given and the
+    search has not decided in :data:`PLAIN_SHARE` of the time limit, search again below a rising bound (:func:`.joint.search.deepen`), which decides classes whose
+    bound is close to their optimum (short schedules of several robots)."""
 
     METHOD = "bfs"
     cells: str = option("all", choices=KINDS,
@@ -74,6 +80,8 @@ class Options(MethodOptions):
     direction: str = option("auto", choices=("auto", "forward", "both"),
                             help="forward, both (also back from the goal states) or auto (both where they can be "
                                  "listed)")
+    deepen: bool = option(True, help="without an incumbent, when the plain search has not decided in a fifth of the "
+                                     "time limit: search again below a rising bound")
 
     @property
     def plain(self) -> bool:
@@ -125,8 +133,12 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
     if max_states > cap:
         raise OptionError(f"bfs: max_states {max_states:,} needs about {human(max_states * per)}, more than the "
                           f"{human(room)} this machine allows (BILLE_MEMORY_GIB sets it)")
-    out = search(instance, cells, budget, U=upper, max_states=max_states, max_steps=options.max_steps,
-                 events=run.events, tables=tables, direction=direction)
+    deepening = options.deepen and upper is None and options.max_steps is None
+    out = search(instance, cells, budget.share(PLAIN_SHARE) if deepening else budget, U=upper,
+                 max_states=max_states, max_steps=options.max_steps, events=run.events, tables=tables,
+                 direction=direction)
+    if deepening and out.stop == "time" and not budget.expired():  # its share spent, not the whole limit
+        out = _deepened(instance, cells, out, budget, max_states, run.events, tables, direction)
     result = _result(instance, cells, out, upper, incumbent, options, budget)
     if result.schedule is not None:
         run.events.schedule(result.schedule)
@@ -139,6 +151,25 @@ def _tiny(instance: Instance) -> bool:
     return joint_states(instance) <= PYTHON_SMALL
 
 
+def _deepened(instance: Instance, cells: Cells, plain, budget, max_states: int, events, tables, direction: str):
+    """After the plain search's share: deepening (:func:`.joint.search.deepen`) if its first run,
+    below one more than the plain search proved, ends within a quarter of the time the plain
+    search took (it then cuts most of what the plain search stores); else the plain search again
+    with the time left. The better proof of the two is kept."""
+    from .joint.search import deepen, search
+    from .joint.tables import compile_tables
+
+    spent = budget.elapsed()
+    out = deepen(instance, cells, budget, proved=int(plain.proved), max_states=max_states, events=events,
+                 tables=compile_tables(instance, cells, distances=True), probe=spent / 4)
+    if out is None:
+        out = search(instance, cells, budget, max_states=max_states, events=events, tables=tables,
+                     direction=direction)
+    if out.stop not in ("goal", "exhausted"):
+        out.proved = max(out.proved, plain.proved)
+    return out
+
+
 def _direction(options: Options, upper: int | None) -> str:
     if options.direction != "auto":
         return options.direction
@@ -149,7 +180,7 @@ def _result(instance: Instance, cells: Cells, out, upper, incumbent, options: Op
     """The search's outcome as a result whose claim names its class (module docstring)."""
     stats = {**out.stats(), "class": {**cells.to_json(), "lower_bound": None}}
     whole = cells.unconditional
-    schedule, status, proved = None, None, out.proved
+    schedule, status, proved, failure = None, None, out.proved, None
     if out.stop == "goal":
         schedule = Schedule.from_ids(instance, out.ids, meta={"method": "bfs"})
         status = "optimal"
@@ -158,16 +189,15 @@ def _result(instance: Instance, cells: Cells, out, upper, incumbent, options: Op
         member = whole or _member(instance, cells, incumbent)
         status = "optimal" if member else "feasible"
         if not member:
-            stats["failure"] = f"no schedule among {cells.name} is shorter than the incumbent's {upper} steps"
+            failure = no_schedule(f"no schedule among {cells.name} is shorter than the incumbent's {upper} steps")
     elif out.stop == "exhausted":
         status = "infeasible" if whole else "unsolved"
         if not whole:
-            stats["failure"] = f"no schedule among {cells.name} exists"
+            failure = no_schedule(f"no schedule among {cells.name} exists")
             proved = None
     else:
-        failure = {"time": TIME_LIMIT, "cancelled": INTERRUPTED, "states": f"state cap ({out.states:,} states)",
-                   "steps": "step bound"}[out.stop]
-        stats["failure"] = failure
+        failure = {"time": TIME_LIMIT, "cancelled": INTERRUPTED, "states": cap(f"state cap ({out.states:,} states)"),
+                   "steps": cap("step bound")}[out.stop]
         status = {"time": "timeout", "cancelled": "interrupted"}.get(out.stop, "unsolved")
         if upper is not None:
             schedule = Schedule.from_ids(instance, incumbent, meta={"method": "bfs"})
@@ -181,7 +211,7 @@ def _result(instance: Instance, cells: Cells, out, upper, incumbent, options: Op
     if whole and status == "optimal" and schedule is not None and upper is not None and out.stop == "exhausted":
         lower = upper
     return Result("bfs", status, schedule, lower_bound=lower, stats=stats, time_s=budget.elapsed(),
-                  claim=claim_of(cells, None if whole else proved))
+                  claim=claim_of(cells, None if whole else proved), failure=failure)
 
 
 def claim_of(cells: Cells, lower: int | None) -> Claim:

@@ -14,10 +14,11 @@ from itertools import product
 import numpy as np
 
 from bille.instances import Instance
+from bille.instances.failure import cap
 from bille.instances.limits import CHECK_EVERY
 from bille.instances.rules import State, apply, goal_violation
 from bille.instances.result import Result
-from bille.instances.run import Run
+from bille.instances.run import INTERRUPTED, Run
 from bille.instances.schedule import Schedule
 from bille.instances.successors import candidate_actions, disjoint_products
 
@@ -43,9 +44,8 @@ def plan(instance: Instance, options, run: Run | None = None) -> Result:
     frontier = [root]
     depth, expanded, truncated = 0, 0, False
 
-    def stats(failure=None):
-        out = {"expanded": expanded, "states": len(parent), "depth": depth}
-        return out if failure is None else {**out, "failure": failure}
+    def stats():
+        return {"expanded": expanded, "states": len(parent), "depth": depth}
 
     def stopped() -> Result | None:
         """The run's end if out of time or states; every state within ``depth`` steps has been
@@ -54,15 +54,15 @@ def plan(instance: Instance, options, run: Run | None = None) -> Result:
         if not out_of_time and len(parent) <= max_states:
             return None
         return Result("bfs", "timeout" if out_of_time else "unsolved", lower_bound=depth + 1,
-                      stats=stats(budget.why() if out_of_time else "state cap"),
-                      time_s=budget.elapsed())
+                      stats=stats(), time_s=budget.elapsed(),
+                      failure=budget.why() if out_of_time else cap("state cap"))
 
     try:
         while frontier:
             for n, s in enumerate(frontier, 1):
                 if n % CHECK_EVERY == 0 and budget.expired():  # levels below this one were checked
-                    return Result("bfs", "timeout", lower_bound=depth, stats=stats(budget.why()),
-                                  time_s=budget.elapsed())
+                    return Result("bfs", "timeout", lower_bound=depth, stats=stats(),
+                                  time_s=budget.elapsed(), failure=budget.why())
                 if goal_violation(world, s, goal_tiles, goal_cells, depth) is None:
                     schedule = _unwind(instance, parent, s)
                     events.schedule(schedule)
@@ -93,11 +93,11 @@ def plan(instance: Instance, options, run: Run | None = None) -> Result:
             events.progress({"lower": depth, "best": None, "elapsed": budget.elapsed(), "depth": depth,
                              "states": len(parent)})
     except KeyboardInterrupt:  # every level above the one under way was checked: a proved bound
-        return Result("bfs", "interrupted", lower_bound=depth, stats=stats("interrupted"),
-                      time_s=budget.elapsed())
+        return Result("bfs", "interrupted", lower_bound=depth, stats=stats(), time_s=budget.elapsed(),
+                      failure=INTERRUPTED)
     if truncated:  # no goal within max_steps
-        return Result("bfs", "unsolved", lower_bound=max_steps + 1, stats=stats("step bound"),
-                      time_s=budget.elapsed())
+        return Result("bfs", "unsolved", lower_bound=max_steps + 1, stats=stats(), time_s=budget.elapsed(),
+                      failure=cap("step bound"))
     return Result("bfs", "infeasible", stats=stats(), time_s=budget.elapsed())
 
 

@@ -19,7 +19,7 @@ from bille.heuristics.loop import reconfigure
 from bille.heuristics.loop.loop_options import LoopOptions
 from bille.instances import Instance, OptionError
 from bille.instances.metrics import makespan as ids_makespan
-from bille.instances.run import TIME_LIMIT, Budget, Run
+from bille.instances.run import Budget, Run
 from bille.instances.schedule import Schedule, bind
 
 from .compact import compact
@@ -82,7 +82,7 @@ def retry(instance: Instance, cut: list, budget: Budget) -> Incumbent | None:
     """The first valid schedule of the runs that :func:`first_schedule` cut short (``cut``: name,
     what to run, seconds it had), each given twice its last time in turn (rounds over the runs
     still cut, until one finds a schedule or ``budget`` ends), or None. A run is *cut short* when
-    its time ran out between the loop's steps (``stats.failure`` "time limit": it was still
+    its time ran out between the loop's steps (``failure.kind`` ``time-limit``: it was still
     getting on); one that ends otherwise (a deadlock, no joint plan for one step within its time)
     is not tried again: more time rarely gives it a schedule and takes the complete planner's
     (docs/decisions.md). Example: on ``bille gen random --width 40 --height 40 --tiles 600
@@ -215,7 +215,7 @@ def _portfolio(instance: Instance, runs, budget: Budget, improve: bool, first: b
 def _cut_short(found) -> bool:
     """Whether a run without a schedule ended because its time ran out between the loop's steps
     (see :func:`retry`)."""
-    return found is not None and found.stats.get("failure") == TIME_LIMIT
+    return found is not None and found.failure is not None and found.failure.kind == "time-limit"
 
 
 def _compact_s(budget: float | None) -> float | None:

@@ -11,6 +11,7 @@ import pytest
 
 from bille.instances import OptionError, load_instance
 from bille.instances.bundled import bundled_path
+from bille.instances.failure import Failure
 from bille.instances.moveset import Kind
 from bille.instances.run import Budget
 from bille.instances.schedule import Schedule, bind, save_schedule
@@ -227,10 +228,11 @@ def _late_runs(monkeypatch, needs: dict) -> list:
         limit = round(budget.left(), 1)
         calls.append((how, limit))
         if needs[how] is None:
-            return Result(how, "unsolved", stats={"failure": "deadlock"})
+            return Result(how, "unsolved", failure=Failure("stuck", "deadlock"))
         if limit >= needs[how]:
             return Result(how, "feasible", sched)
-        return Result(how, "timeout", stats={"failure": "time limit" if how != "one step" else "no joint plan"})
+        return Result(how, "timeout", failure=Failure("time-limit", "time limit") if how != "one step"
+                      else Failure("stuck", "no joint plan"))
 
     monkeypatch.setattr(incumbent, "_run", run)
     return calls
@@ -311,7 +313,7 @@ def test_gave_up_and_out_of_time_are_told_apart():
 
     deadlock = solve(load_instance(bundled_path("crowded-2")), "temporal-astar", time_limit=60,
                      budget=Budget(clock=_Ticks()))
-    assert deadlock.status == "unsolved" and deadlock.stats["failure"] == "deadlock"  # before its time limit
+    assert deadlock.status == "unsolved" and deadlock.failure.text == "deadlock"  # before its time limit
     late = solve(load_instance(bundled_path("compare-6")), "mstar", time_limit=0.05, bound=True,
                  budget=Budget(clock=_Ticks()))
     assert late.status == "timeout" and late.schedule is None and late.lower_bound is not None

@@ -9,6 +9,7 @@ import pytest
 from bille.instances import load_instance
 from bille.instances.bundled import bundled_path
 from bille.instances.claim import Claim
+from bille.instances.failure import Failure
 from bille.instances.result import Result
 from bille.instances.run import Budget
 from bille.solvers import auto, solve, validate
@@ -38,7 +39,7 @@ def test_a_brute_force_out_of_its_share_hands_over_with_its_bound(monkeypatch):
 
     def out_of_time(instance, *, run=None, **kw):
         shares.append(run.budget.seconds())
-        return Result("bfs", "timeout", lower_bound=9, stats={"failure": "time limit"})
+        return Result("bfs", "timeout", lower_bound=9, failure=Failure("time-limit", "time limit"))
 
     def anytime(instance, *, run, bounds, progress=None):
         handed.append((run.budget.seconds(), bounds.lower, bounds.parts.get("brute force")))

@@ -46,7 +46,7 @@ def test_limits_give_unsolved_with_a_proved_lower_bound():
     inst = make("TTTTTTTT", [{"at": [0, 0]}], moveset="point", robot_goals=[[7, 0]])
     result = plan(inst, Options(max_steps=3))  # the search's own proof: nothing within 3 steps
     assert result.status == "unsolved" and result.lower_bound == 4 and result.schedule is None
-    assert result.stats["failure"] == "step bound"
+    assert result.failure.text == "step bound"
     assert solve(inst, "bfs", max_steps=3).lower_bound == 4  # the static bound only where asked for
     assert solve(inst, "bfs", max_steps=3, bound=True).lower_bound == 7
 
@@ -70,5 +70,5 @@ def test_bfs_looks_at_the_clock_inside_one_state(engine):
                 robot_goals=[[x, 2] for x in range(10)])
     clock = iter(range(10**6))
     result = plan(inst, Options(engine=engine), run=Run(Budget(2.5, clock=lambda: next(clock))))
-    assert result.status == "timeout" and result.stats["failure"] == "time limit"
+    assert result.status == "timeout" and result.failure.text == "time limit"
     assert result.stats["depth"] == 0 and result.lower_bound == 1

@@ -143,7 +143,7 @@ def test_a_swap_in_a_corridor_ends_at_the_node_budget_without_a_false_proof():
                 collisions="classic")
     result = solve(inst, "cbs", max_nodes=50, time_limit=None)
     assert result.status == "unsolved" and result.schedule is None
-    assert "node limit" in result.stats["failure"]
+    assert "node limit" in result.failure.text
 
 
 @pytest.mark.parametrize("name", ["compare-2", "compare-3", "compare-4", "crowded-2", "crowded-3"])
@@ -281,5 +281,5 @@ def test_the_root_looks_at_the_clock_between_its_robots(monkeypatch):
     monkeypatch.setattr(cbs_search.Tree, "replan", counted)
     clock = iter(range(10**6))  # one second per look
     result = solve(inst, "cbs", budget=Budget(clock=lambda: next(clock)), time_limit=20)
-    assert result.status == "timeout" and result.stats["failure"] == "time limit"
+    assert result.status == "timeout" and result.failure.text == "time limit"
     assert len(planned) < 50

@@ -241,7 +241,7 @@ def test_a_restricted_search_on_a_fixed_structure_or_below_its_class_bound():
     assert solve(inst, "cpsat", keep_structure=True, time_limit=30).status == "optimal"
     capped = solve(BRIDGE, "cpsat", keep_structure=True, max_makespan=10, time_limit=30)
     assert capped.status == "unsolved" and capped.claim.lower == 13
-    assert "its class needs 13" in capped.stats["failure"] and capped.lower_bound <= 13
+    assert "its class needs 13" in capped.failure.text and capped.lower_bound <= 13
 
 
 @pytest.mark.slow

@@ -109,5 +109,5 @@ def test_joint_astar_looks_at_the_clock_inside_one_expansion():
     inst = classic("\n".join(["T" * 10] * 3), robots, robot_goals=[[x, 2] for x in range(10)])
     clock = iter(range(10**6))
     result = astar.plan(inst, run=Run(Budget(2.5, clock=lambda: next(clock))))
-    assert result.status == "timeout" and result.stats["failure"] == "time limit"
+    assert result.status == "timeout" and result.failure.text == "time limit"
     assert result.stats["expanded"] == 1 and 0 < result.stats["generated"] < 5**10

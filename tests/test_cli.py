@@ -154,7 +154,8 @@ def test_gap_reads_a_repeated_methods_option_as_one_list(tmp_path, capsys):
 def test_solve_exact_json(capsys, tmp_path):
     code, out, _ = run(capsys, "solve", "crowded-3", "--method", "sat", "--json", "-o", str(tmp_path / "s.yaml"))
     result = json.loads(out)
-    assert code == 0 and set(result) == {"method", "status", "metrics", "lower_bound", "time_s", "claim", "stats", "schedule"}
+    assert code == 0 and set(result) == {"method", "status", "metrics", "lower_bound", "time_s", "claim",
+                                           "failure", "stats", "schedule"} and result["failure"] is None
     assert result["status"] == "optimal" and result["metrics"]["makespan"] == result["lower_bound"] == 4
     assert validate(load_instance(bundled_path("crowded-3")), load_schedule(tmp_path / "s.yaml")).valid
 

@@ -78,7 +78,7 @@ def test_single_carry_leaves_out_the_hand_over(method, optimum):
     inst = TINY["handover"]()
     capped = solve(inst, method, single_carry=True, max_makespan=16)
     assert capped.status == "unsolved" and capped.claim.lower == 17
-    assert "single-carry" in capped.stats["failure"]
+    assert "single-carry" in capped.failure.text
     # no bound for the instance: a schedule with a hand-over is shorter (one of 16 steps, from
     # the model of all schedules; the brute force's optimum, 12, costs seconds)
     model = build(inst, 16, Options())
@@ -192,7 +192,7 @@ def test_no_schedule_within_the_horizon_cap_is_no_proof(method, monkeypatch):
     monkeypatch.setattr(incumbent, "complete_search", lambda *args: (None, False))  # as if it ran out of time
     for threads in ({}, {"threads": 2}) if method == "cpsat" else ({},):
         result = solve(inst, method, max_makespan=8, time_limit=120, **threads)
-        assert result.status == "unsolved" and "horizon cap 8" in result.stats["failure"]
+        assert result.status == "unsolved" and "horizon cap 8" in result.failure.text
         assert result.lower_bound == 9 and result.schedule is None
 
 

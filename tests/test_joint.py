@@ -118,7 +118,7 @@ def test_both_ends_agree_on_classes_and_classic_instances():
 def test_both_ends_stop_with_the_bound_of_the_layers_done():
     inst = make("TTTTTTTT", [{"at": [0, 0]}], moveset="point", robot_goals=[[7, 0]])
     got = bfs(inst, direction="both", max_steps=3)
-    assert got.status == "unsolved" and got.lower_bound == 4 and got.stats["failure"] == "step bound"
+    assert got.status == "unsolved" and got.lower_bound == 4 and got.failure.text == "step bound"
     got = bfs(inst, direction="both")
     assert got.status == "optimal" and got.metrics.makespan == 7
 
@@ -143,7 +143,7 @@ def check_classes(instances) -> int:
                 last = got.metrics.makespan
                 checked += 1
             else:
-                assert got.status == "unsolved" and "exists" in got.stats["failure"], inst.name
+                assert got.status == "unsolved" and "exists" in got.failure.text, inst.name
                 last = float("inf")
     return checked
 
@@ -190,12 +190,12 @@ def test_below_an_incumbent_the_optimum_is_found_or_the_incumbent_proved():
 def test_stopped_search_keeps_a_proved_bound_of_its_class():
     inst = make("TTTTTTTT", [{"at": [0, 0]}], moveset="point", robot_goals=[[7, 0]])
     got = bfs(inst, max_steps=3)
-    assert got.status == "unsolved" and got.lower_bound == 4 and got.stats["failure"] == "step bound"
+    assert got.status == "unsolved" and got.lower_bound == 4 and got.failure.text == "step bound"
     got = bfs(inst, max_steps=3, cells="keep")
     assert got.lower_bound is None and got.stats["class"]["lower_bound"] == 4
     assert "among the schedules that keep the structure" in got.stats["stopped"]
     capped = bfs(inst, max_states=3)
-    assert capped.status == "unsolved" and capped.stats["failure"].startswith("state cap")
+    assert capped.status == "unsolved" and capped.failure.text.startswith("state cap")
     assert capped.lower_bound == capped.stats["depth"] + 1
 
 
@@ -210,7 +210,7 @@ def test_cancel_keeps_the_bound(direction):
         if next(looks) == 2:
             budget.cancel()
     got = plan(inst, Options(direction=direction, engine="compiled"), run=Run(budget, Events(on_progress=progress)))
-    assert got.status == "interrupted" and got.stats["failure"] == "interrupted"
+    assert got.status == "interrupted" and got.failure.text == "interrupted"
     assert got.lower_bound == got.stats["depth"] + 1 <= bfs(inst).metrics.makespan
 
 
@@ -241,7 +241,7 @@ def test_many_robots_without_goals_and_a_small_state_cap_stop_cleanly():
     inst = make("\n".join(["T" * 19 + "."] + ["T" * 20] * 19), robots, moveset="point",
                 goal="\n".join(["T" * 20] * 19 + ["." + "T" * 19]))
     got = plan(inst, Options(engine="compiled", max_states=50), run=Run(Budget(5)))
-    assert got.status == "unsolved" and got.stats["failure"].startswith("state cap")
+    assert got.status == "unsolved" and got.failure.text.startswith("state cap")
 
 
 def test_a_moveset_whose_pick_carries_cells_goes_forward_only(tmp_path):
@@ -257,3 +257,50 @@ def test_a_moveset_whose_pick_carries_cells_goes_forward_only(tmp_path):
     assert not reversible(compile_tables(inst, cells_of(inst, "all")))
     ref, got = reference(inst), bfs(inst, direction="both")
     assert ref.status == got.status and (got.metrics is None or got.metrics.makespan == ref.metrics.makespan)
+
+
+def test_deepening_finds_the_optimum_of_each_class():
+    """Searched below a rising bound from nothing proved, each class's optimum is the plain
+    search's (module solvers.joint.search, "Deepening"): every bound it proves on the way is at
+    most that optimum, and a class without schedules is exhausted."""
+    from bille.solvers.joint.search import deepen
+
+    checked = 0
+    for inst in tiny_instances(40):
+        for kind in ("all", "keep"):
+            plain = bfs(inst, cells=kind, deepen=False)
+            cells = cells_of(inst, kind)
+            bounds = []
+            events = Events(on_progress=lambda p: bounds.append(p["lower"]) if "deepening" in p else None)
+            got = deepen(inst, cells, Budget(), proved=0, max_states=1_000_000, events=events,
+                         tables=compile_tables(inst, cells, distances=True))
+            if plain.status == "optimal":
+                assert got.stop == "goal" and got.proved == plain.metrics.makespan, (inst.name, kind)
+                assert all(b <= plain.metrics.makespan for b in bounds)
+                ids = got.ids
+                assert ids.shape[1] == plain.metrics.makespan
+                checked += 1
+            elif plain.status in ("infeasible", "unsolved"):
+                assert got.stop == "exhausted", (inst.name, kind)
+    assert checked >= 30
+
+
+def test_a_search_that_does_not_decide_in_its_share_deepens(monkeypatch):
+    """The plain search gets a share of the time limit (none here: it stops at once), then the
+    search deepens: the same optimum, a valid schedule."""
+    from bille.solvers import bfs as bfs_module
+
+    monkeypatch.setattr(bfs_module, "PLAIN_SHARE", 0.0)
+    deepened = 0
+    for inst in tiny_instances(12):
+        plain = bfs(inst, cells="keep", deepen=False)
+        if plain.status != "optimal" or plain.metrics.makespan < 2:
+            continue
+        events = []
+        got = plan(inst, Options(engine="compiled", cells="keep"),
+                   run=Run(Budget(60.0), Events(on_progress=events.append)))
+        report = validate(inst, got.schedule)
+        assert got.status == "optimal" and report.valid, inst.name
+        assert report.metrics.makespan == plain.metrics.makespan == got.claim.lower, inst.name
+        deepened += any("deepening" in e for e in events)
+    assert deepened >= 1

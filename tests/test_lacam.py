@@ -8,6 +8,7 @@ import pytest
 from bille.instances import InstanceError, load_instance
 from bille.instances.bundled import bundled_path
 from bille.instances.claim import Claim
+from bille.instances.failure import Failure
 from bille.heuristics.lacam import states as lacam_states
 from bille.instances.generators.random import crowded
 from bille.instances.run import Run
@@ -70,7 +71,7 @@ def test_complete_and_eventually_optimal_on_tiny_instances(inst):
     best = reference(inst.name)
     first = checked(inst, improve=0.0)
     if best is None:  # the whole walking space is searched before it says so
-        assert first.status == "unsolved" and "no walking schedule" in first.stats["failure"]
+        assert first.status == "unsolved" and "no walking schedule" in first.failure.text
         return
     assert first.schedule is not None and first.metrics.makespan >= best
     final = checked(inst, improve=1.0)
@@ -208,7 +209,7 @@ def test_a_loop_out_of_its_share_of_the_time_hands_over_to_the_complete_search(m
 
     def stuck(instance, options, run, **kw):
         given.append(run.budget.seconds())
-        return Result("lacam", "timeout", stats={"failure": "LaCAM* found no joint plan (timeout)"})
+        return Result("lacam", "timeout", failure=Failure("stuck", "LaCAM* found no joint plan (timeout)"))
 
     monkeypatch.setattr(reconfigure, "plan", stuck)
     name = next(i.name for i in TINY_RECONFIGURATION if brute_force(i.name).status == "optimal")
@@ -368,4 +369,4 @@ def test_an_unreachable_goal_is_said_before_any_path_is_spread():
     inst = make("TT.TT\nTT.TT", [{"at": [0, 0]}, {"at": [4, 1]}], moveset="point", collisions="classic",
                 robot_goals=[[4, 0], [3, 1]])
     result = solve(inst, "lacam", time_limit=10)
-    assert result.status == "unsolved" and result.stats["failure"] == "unreachable"
+    assert result.status == "unsolved" and result.failure.text == "unreachable"

@@ -79,7 +79,7 @@ def test_priority_shifting_resolves_a_deadlock_that_fixed_priorities_cannot():
     # of its way and must be let through first, while robot 0 waits in the side branch
     inst = make(DEAD_END["grid"], DEAD_END["robots"], robot_goals=DEAD_END["robot_goals"])
     fixed = solve(inst, "temporal-astar", horizon=5, shift_priorities=False)
-    assert fixed.status == "unsolved" and fixed.stats["failure"] == "deadlock"
+    assert fixed.status == "unsolved" and fixed.failure.text == "deadlock"
     shifting = solve(inst, "temporal-astar", horizon=5)
     assert shifting.status == "feasible" and shifting.stats["priority_shifts"] >= 1
     assert validate(inst, shifting.schedule).valid
@@ -93,7 +93,7 @@ def test_temporal_astar_reports_failure_quickly():
     result = solve(inst, "temporal-astar", horizon=5)
     assert result.stats["expanded"] < 1_000  # it gives up after a few hundred expansions (153)
     assert result.status == "unsolved" and result.schedule is None
-    assert result.stats["failure"] == "deadlock"
+    assert result.failure.text == "deadlock"
     assert solve(inst, "astar").status == "optimal"
 
 
@@ -136,7 +136,7 @@ def test_temporal_astar_heeds_its_time_limit_between_replans():
     clock = iter(range(10**6))
     result = solve(load_instance(bundled_path("point-4")), "temporal-astar", time_limit=3,
                    budget=Budget(clock=lambda: next(clock)))
-    assert result.status == "timeout" and result.stats["failure"] == "time limit"
+    assert result.status == "timeout" and result.failure.text == "time limit"
     assert result.stats["replans"] <= 1
 
 
@@ -146,7 +146,7 @@ def test_joint_astar_takes_a_thousand_classic_robots_without_recursion():
     inst = make("\n".join(["T" * 64] * 64), robots, moveset="point", collisions="classic",
                 robot_goals=[[r["at"][0] + 1, r["at"][1]] for r in robots])
     result = solve(inst, "astar", time_limit=1)  # one state has 5**1000 joint actions: the limit ends it
-    assert result.status == "timeout" and result.stats["failure"] == "time limit"
+    assert result.status == "timeout" and result.failure.text == "time limit"
 
 
 def test_an_absurd_horizon_is_refused_before_anything_runs():

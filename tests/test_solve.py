@@ -18,6 +18,7 @@ import pytest
 from bille import solvers
 from bille.instances import InstanceError, load_instance
 from bille.instances.bundled import bundled_path
+from bille.instances.failure import Failure
 from bille.instances.moveset import Moveset
 from bille.instances.result import Result
 from bille.instances.run import Budget
@@ -71,7 +72,7 @@ def spy_heuristic(clock, seen, spends=0.0):
     def plan(instance, options=None, run=None) -> Result:
         seen.append(run.budget.seconds())
         clock.now += spends
-        return Result("spy", "unsolved", stats={"failure": "deadlock"})
+        return Result("spy", "unsolved", failure=Failure("stuck", "deadlock"))
     return plan
 
 
@@ -94,7 +95,7 @@ def test_a_bound_that_takes_the_whole_limit_leaves_the_method_out(monkeypatch, c
     monkeypatch.setitem(METHODS, "anytime", spy_method(clock, seen))
     result = solve(POINT4, "anytime", time_limit=10, budget=Budget(clock=clock))
     assert seen == [] and result.status == "timeout" and result.lower_bound == 3
-    assert "lower bound" in result.stats["failure"]
+    assert "lower bound" in result.failure.text
 
 
 def test_the_default_time_limit_of_a_method_counts_too(monkeypatch, clock, slow_bound):

@@ -80,7 +80,8 @@ def interrupted_json(argv: list[str]) -> None:
     """With ``--json`` among ``argv`` and no JSON object printed yet, the one object of an
     interrupted command (Ctrl-C before it had anything to say)."""
     if "--json" in argv and not JSON_PRINTED[0]:
-        print_json({"status": "interrupted", "stats": {"failure": "interrupted before the command finished"}})
+        print_json({"status": "interrupted",
+                    "failure": {"kind": "interrupted", "text": "interrupted before the command finished"}})
 
 
 def stderr_console():

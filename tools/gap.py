@@ -195,7 +195,7 @@ def _solve_row(inst, config: Config, time_limit, threads, progress, schedules) -
         return _row(inst, config.label, "n/a", note=str(exc))
     if schedules is not None and result.schedule is not None:
         schedules[inst.name, config.label] = result.schedule
-    note = (result.stats.get("failure") or result.stats.get("reason") or result.stats.get("violation")
+    note = ((result.failure and result.failure.text) or result.stats.get("reason") or result.stats.get("violation")
             or result.stats.get("contradiction") or "")
     if not note and not result.claim.unconditional:
         note = f"optimizes: {result.claim.text()}"

@@ -116,8 +116,12 @@ def _result_lines(inst, method: str, result) -> list[str]:
 
         makespan = result.metrics.makespan if result.metrics else None
         lines += report(makespan, result.lower_bound, stats["class_bounds"], stats.get("classes"))
-    lines += [f"{key}: {_explain(inst, key, stats[key])}" for key in ("unreachable", "failure", "stopped", "reason",
-                                                                        "violation") if key in stats]
+    if "unreachable" in stats:
+        lines.append("unreachable: " + "; ".join(f"robot {i} cannot reach its goal {inst.robot_goals[i]} even alone"
+                                                 for i in stats["unreachable"]))
+    if result.failure is not None:
+        lines.append(f"failure: {_explain(result.failure)}")
+    lines += [f"{key}: {stats[key]}" for key in ("stopped", "reason", "violation") if key in stats]
     if stats.get("load_transfer"):
         lines.append(f"load transfers: {stats['relays']} relays, {stats['swaps']} swaps "
                      f"({stats['pairs_considered']} robot pairs within d_tr considered)")
@@ -184,14 +188,12 @@ def _number(value):
     return value
 
 
-def _explain(inst, key: str, value) -> str:
-    if key == "unreachable":
-        return "; ".join(f"robot {i} cannot reach its goal {inst.robot_goals[i]} even alone" for i in value)
-    if key == "failure" and "deadlock" in str(value):
+def _explain(failure) -> str:
+    """A failure as ``bille solve`` prints it: a heuristic that gave up says what to try."""
+    if failure.kind == "stuck":
         complete = "-m auto or -m lacam (complete: it finds a schedule whenever one exists)"
-        return (f"{value}: the planner went round in circles, or no priority order it tried let every robot "
-                f"move (it is not complete); try {complete}")
-    return str(value)
+        return f"{failure.text}: the planner gave up, which proves nothing (it is not complete); try {complete}"
+    return failure.text
 
 
 @click.command()

@@ -8,11 +8,12 @@ import numpy as np
 
 from bille.instances import Instance, OptionError
 from bille.instances.claim import Claim
+from bille.instances.failure import Failure, cap
 from bille.instances.grid import neighbour_table
 from bille.instances.moveset import Kind
 from bille.instances.options import MethodOptions, option
 from bille.instances.result import Result
-from bille.instances.run import Run
+from bille.instances.run import INTERRUPTED, Run
 from bille.instances.schedule import Schedule
 
 from ..joint import NO_WALK, JointProblem, check_tables, require_path_planning
@@ -165,10 +166,10 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
         found = tree.run(root)
     except (OutOfBudget, Stopped):
         over = budget.expired()
-        stats["failure"] = budget.why() if over else f"node limit ({max_nodes} expanded)"
-        return _proved("timeout" if over else "unsolved", None, tree.lower, claim, stats)
+        failure = budget.why() if over else cap(f"node limit ({max_nodes} expanded)")
+        return _proved("timeout" if over else "unsolved", None, tree.lower, claim, stats, failure)
     except KeyboardInterrupt:
-        return _proved("interrupted", None, tree.lower, claim, stats)
+        return _proved("interrupted", None, tree.lower, claim, stats, INTERRUPTED)
     if found is None:
         return _no_schedule(instance, closed, stats, "no schedule keeps every constraint")
     result = _result(instance, agents, found, tree, claim, stats)
@@ -180,17 +181,17 @@ def _no_schedule(instance: Instance, closed: bool, stats: dict, why: str) -> Res
     if closed:
         stats["why"] = why
         return Result("cbs", "infeasible", stats=stats)
-    stats["failure"] = NO_WALK
     stats["why"] = why
-    return Result("cbs", "unsolved", stats=stats)
+    return Result("cbs", "unsolved", stats=stats, failure=NO_WALK)
 
 
-def _proved(status: str, schedule: Schedule | None, lower: int, claim: Claim, stats: dict) -> Result:
+def _proved(status: str, schedule: Schedule | None, lower: int, claim: Claim, stats: dict,
+            failure: Failure | None = None) -> Result:
     """A result with the bound the tree proved: the result's ``lower_bound`` for the makespan over
     every schedule, the claim's otherwise (the sum of costs, or over walking schedules only)."""
     if claim.unconditional:
-        return Result("cbs", status, schedule, lower_bound=lower, stats=stats, claim=claim)
-    return Result("cbs", status, schedule, stats=stats, claim=dataclasses.replace(claim, lower=lower))
+        return Result("cbs", status, schedule, lower_bound=lower, stats=stats, claim=claim, failure=failure)
+    return Result("cbs", status, schedule, stats=stats, claim=dataclasses.replace(claim, lower=lower), failure=failure)
 
 
 def _result(instance: Instance, agents: list[Agent], node: Node, tree: Tree, claim: Claim, stats: dict) -> Result:

@@ -38,7 +38,7 @@ def method(instance: Instance, options: Options | None = None, run: Run | None =
     if loop.status not in ("unsolved", "timeout") or run.budget.expired():
         return loop
     whole = states.plan(instance, run=run, improve=o.improve, max_nodes=o.max_nodes, seed=o.seed)
-    whole.stats["loop"] = {"status": loop.status, "failure": loop.stats.get("failure"),
+    whole.stats["loop"] = {"status": loop.status, "failure": None if loop.failure is None else loop.failure.text,
                            "steps": loop.stats.get("steps", 0)}
     return whole
 

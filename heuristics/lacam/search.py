@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 
 from bille.instances import Instance
 from bille.instances.claim import Claim
+from bille.instances.failure import CANNOT_REACH, cap
 from bille.instances.options import option, refuse
 from bille.instances.run import Budget, Run
 
@@ -103,7 +104,8 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
     run = run or Run()
     status, steps, stats = joint_plan(problem, objective=o.objective, budget=run.budget, improve=o.improve,
                                       max_nodes=o.max_nodes, seed=o.seed, progress=run.events.on_progress)
-    result = to_result(instance, "lacam", status, steps, stats=stats, claim=Claim(o.objective, walking_only=True))
+    result = to_result(instance, "lacam", status, steps, stats=stats, claim=Claim(o.objective, walking_only=True),
+                       failure=stats.pop("failure", None))
     if result.schedule is not None:
         run.events.schedule(result.schedule)
     return result
@@ -113,7 +115,8 @@ def joint_plan(problem: JointProblem, *, objective: str = "makespan", budget: Bu
                improve: float = 0.0, max_nodes: int = 2_000_000, seed: int = 0,
                pinned: dict[int, frozenset] | None = None, progress=None) -> tuple[str, list | None, dict]:
     """LaCAM* on any :class:`JointProblem` within ``budget`` (None: no limit): ``(status, joint
-    actions or None, stats)``; ``progress`` (a run's progress receiver, or None) hears of each
+    actions or None, stats)``, why there is no schedule in ``stats["failure"]`` (a
+    :class:`~bille.instances.failure.Failure`, for the result); ``progress`` (a run's progress receiver, or None) hears of each
     cheaper schedule found.
 
     ``pinned``: robots that wait in the first step while holding the given cells (the
@@ -179,7 +182,7 @@ class _LaCAM:
         space = self.space
         if space.unreachable():
             self.stats["unreachable"] = space.unreachable()
-            self.stats["failure"] = "unreachable"
+            self.stats["failure"] = CANNOT_REACH
             return "unsolved", None, self.stats
         root = self.node(space.start(), None, None, 0)
         explored = {root.config: root}
@@ -229,7 +232,7 @@ class _LaCAM:
                 if len(explored) >= self.max_nodes:
                     exhausted = False
                     if self.best is None:
-                        self.stats["failure"] = "node cap"
+                        self.stats["failure"] = cap("node cap")
                     break
                 child = self.node(nxt, node, actions, node.g + cost)
                 node.edges[child] = (actions, cost)

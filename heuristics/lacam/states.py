@@ -67,7 +67,7 @@ def plan(instance: Instance, *, run: Run | None = None, improve: float = 0.0,
                                   stats={"search": "whole states"})
     if status == "exhausted":
         status = "infeasible"
-    result = to_result(instance, method, status, steps, stats=stats)
+    result = to_result(instance, method, status, steps, stats=stats, failure=stats.pop("failure", None))
     if status == "optimal":  # every schedule searched: the makespan found is the least there is
         result = dataclasses.replace(result, lower_bound=len(steps))
     return result

@@ -40,7 +40,7 @@ and the step bound defaults to four times the robots' summed distances to their 
 least 100.
 
 The run ends when every job is done, no robot carries a tile and every robot with a goal cell
-stands on it. It gives up with status ``unsolved`` (reason in ``stats["failure"]``) when no
+stands on it. It gives up with status ``unsolved`` (reason in the result's ``failure``) when no
 sequence is found, at the step bound, when the motion layer finds no joint action, or when the
 robots are going round in circles after spending the budget of priority shifts; it stops with
 ``timeout`` at the time limit. Like Temporal A*, this loop is not complete.
@@ -50,6 +50,7 @@ from __future__ import annotations
 import numpy as np
 
 from bille.instances import Instance, OptionError
+from bille.instances.failure import CANNOT_REACH, Failure, cap, stuck
 from bille.instances.rules import State, apply
 from bille.instances.run import Budget, Run
 from bille.instances.walking import UNREACHABLE
@@ -67,6 +68,7 @@ from .transfer import LoadTransfer
 
 RESTORED = ("circle_shifts", "relays", "swaps")  # counts that a backtrack sets back
 PROGRESS_STEPS = 16  # the loop tells its progress every so many steps
+DEADLOCK = stuck("deadlock")  # going round in circles with the priority shifts spent
 
 WALKING = ("horizon", "epsilon", "steps", "priority_shifts", "replans", "expanded", "plan_ms_mean",
            "plan_ms_max")  # the counts of path planning (no jobs)
@@ -91,7 +93,8 @@ def plan(instance: Instance, options: LoopOptions | None = None, run: Run | None
         loop = Loop(instance, options, motion=motion, budget=budget, method=method)
     except NoSequence as exc:  # the loop gives up before its first step
         status = "timeout" if budget.expired() else "unsolved"
-        return to_result(instance, method or name, status, None, stats={"failure": str(exc)})
+        kind = budget.why().kind if budget.expired() else "stuck"
+        return to_result(instance, method or name, status, None, stats={}, failure=Failure(kind, str(exc)))
     loop.progress = run.events.on_progress
     result = loop.run(method or name)
     if result.schedule is not None:
@@ -100,11 +103,11 @@ def plan(instance: Instance, options: LoopOptions | None = None, run: Run | None
 
 
 class Stop(Exception):
-    """The loop ends without a schedule: ``reason`` (the result's ``stats.failure``) and its
+    """The loop ends without a schedule: ``reason`` (the result's ``failure``) and its
     ``status`` (``unsolved``, ``timeout``, ``error``)."""
 
-    def __init__(self, reason: str, status: str = "unsolved") -> None:
-        super().__init__(reason)
+    def __init__(self, reason: Failure, status: str = "unsolved") -> None:
+        super().__init__(reason.text)
         self.reason, self.status = reason, status
 
 
@@ -209,12 +212,11 @@ class Loop:
                 unreachable = np.flatnonzero(self._distances() >= UNREACHABLE).tolist()
                 if unreachable:
                     stats["unreachable"] = unreachable
-                    raise Stop("unreachable")
+                    raise Stop(CANNOT_REACH)
             self._steps(step_times)
         except Stop as stop:
-            stats["failure"] = stop.reason
             timing(stats, step_times)
-            return to_result(self.instance, method, stop.status, None, stats=stats)
+            return to_result(self.instance, method, stop.status, None, stats=stats, failure=stop.reason)
         timing(stats, step_times)
         stats["final_priorities"] = list(self.s.Q)
         return to_result(self.instance, method, "feasible", self.s.steps, stats=stats)
@@ -228,7 +230,7 @@ class Loop:
                 told = len(s.steps) // PROGRESS_STEPS
                 self.progress({"lower": None, "best": None, "elapsed": self.budget.elapsed(), "steps": len(s.steps)})
             if len(s.steps) >= self.max_steps:
-                raise Stop("step bound")
+                raise Stop(cap("step bound"))
             if self.budget.expired():
                 raise Stop(self.budget.why(), "timeout")
             t0 = self.budget.now()
@@ -252,9 +254,9 @@ class Loop:
         stats = self.stats
         if self.path_planning:
             if not self.shift_priorities or stats["priority_shifts"] >= self.max_shifts:
-                raise Stop("deadlock")
-            stuck = [i for i in s.Q if not self._at_goal(i)]
-            s.shift_up(stuck[-1])
+                raise Stop(DEADLOCK)
+            behind = [i for i in s.Q if not self._at_goal(i)]
+            s.shift_up(behind[-1])
             stats["priority_shifts"] += 1
             return seen, True
         if stats["circle_shifts"] >= self.max_shifts:
@@ -265,7 +267,7 @@ class Loop:
                 stats["circle_shifts"] = 0
                 self.motion.forget()
                 return set(), True
-            raise Stop("deadlock")
+            raise Stop(DEADLOCK)
         busy = [i for i in s.Q if s.legs[i] or self.goals.of(s, i) is not None] or list(s.Q)
         s.shift_up(busy[-1])
         stats["priority_shifts"] += 1
@@ -290,12 +292,12 @@ class Loop:
             status = "timeout" if motion.failure == "timeout" else "unsolved"
             if self.path_planning:
                 step_times.append(self.budget.now() - t0)
-                raise Stop(self.budget.why() if status == "timeout" else motion.failure, status)
-            raise Stop(f"{motion.label} found no joint plan ({motion.failure})", status)
+                raise Stop(self.budget.why() if status == "timeout" else stuck(motion.failure), status)
+            raise Stop(stuck(f"{motion.label} found no joint plan ({motion.failure})"), status)
         step_times.append(self.budget.now() - t0)
         nxt = apply(s.world, s.state, joint, step=len(s.steps) + 1)
         if not isinstance(nxt, State):  # the planners respect the rules; this is a bug
-            raise Stop(f"internal: {nxt}", "error")
+            raise Stop(Failure("error", f"internal: {nxt}"), "error")
         progress = s.advance(joint, nxt, fixed)
         if progress:
             self.goals.evicted.clear()  # the work has moved on: evicted robots are idle again

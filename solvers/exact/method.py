@@ -32,6 +32,7 @@ import numpy as np
 from bille.encodings.backend import SAT_SOLVERS
 from bille.encodings.model import CONNECTIVITY, Options
 from bille.instances import Instance, OptionError
+from bille.instances.failure import Failure, no_schedule
 from bille.instances.options import MethodOptions, option
 from bille.instances.result import Result
 from bille.instances.run import Budget, Run
@@ -184,12 +185,12 @@ def makespan_search(job: Job, instance: Instance, run: Run | None, max_makespan:
         search.stats["reason"] = "; ".join(bounds.impossible)
         return search.result("infeasible")
     if within is not None and within.empty:  # a proof for the restriction only: not "infeasible"
-        search.stats["failure"] = f"no {RESTRICTIONS[job.restriction][1]} exists: {'; '.join(within.why)}"
-        return search.result("unsolved")
+        return search.result("unsolved", failure=no_schedule(f"no {RESTRICTIONS[job.restriction][1]} exists: "
+                                                             f"{'; '.join(within.why)}"))
     if cap < start:  # the class's bound is already above the cap
-        search.stats["failure"] = (f"no {RESTRICTIONS[job.restriction][1]} with a makespan up to the horizon cap "
-                                   f"{cap}: its class needs {start}")
-        return search.result("unsolved", lower=start)
+        return search.result("unsolved", lower=start, failure=Failure(
+            "cap", f"no {RESTRICTIONS[job.restriction][1]} with a makespan up to the horizon cap {cap}: its class needs "
+                   f"{start}"))
     if goal_violation(instance.world, instance.start_state, instance.goal_tiles, instance.goal_cells, 0) is None:
         search.stats["tiles_traveled_optimal"] = True
         return search.result("optimal", np.zeros((instance.num_robots, 0), dtype=np.int64), lower=0)

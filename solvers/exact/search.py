@@ -17,8 +17,9 @@ from bille.encodings.model import Model, Options, OutOfTime, build
 from bille.encodings.solution import decode
 from bille.instances import Instance
 from bille.instances.claim import EVERY, Claim
+from bille.instances.failure import Failure, cap
 from bille.instances.result import Result
-from bille.instances.run import Budget
+from bille.instances.run import INTERRUPTED, Budget
 from bille.instances.schedule import Schedule
 
 # the restrictions of the model (encodings.model.Options): the schedules their optimum is optimal
@@ -107,7 +108,7 @@ class Search:
             self.progress({"horizon": row["T"], "answer": row["answer"], "time_s": row["time_s"],
                            "elapsed": self.budget.elapsed()})
 
-    def result(self, status: str, ids=None, lower: int | None = None) -> Result:
+    def result(self, status: str, ids=None, lower: int | None = None, failure: Failure | None = None) -> Result:
         """The result; a restricted search's proofs (:data:`RESTRICTIONS`) hold for the schedules of
         the restriction only, so they go to its claim and the instance keeps its static bound
         (``optimal`` then means optimal among the restriction's schedules)."""
@@ -117,7 +118,7 @@ class Search:
         method = self.job.method
         schedule = None if ids is None else Schedule.from_ids(self.instance, ids, meta={"method": method})
         return Result(method, status, schedule, lower_bound=lower, stats=self.stats, time_s=self.budget.elapsed(),
-                      claim=self.claim)
+                      claim=self.claim, failure=failure)
 
     def timeout(self) -> Result:
         """Time is up: the incumbent if there is one (also one above the horizon cap), with the
@@ -125,13 +126,13 @@ class Search:
         best = self.incumbent if self.incumbent is not None else self.fallback
         if best is not None:
             return self.result("feasible", best, lower=self.proved_below)
-        return self.result("timeout", lower=self.proved_below)
+        return self.result("timeout", lower=self.proved_below, failure=self.budget.why())
 
     def interrupted(self) -> Result:
         """Stopped by the user: the best schedule so far (the incumbent, else one above the
         horizon cap), if any, with the bound proved."""
         best = self.incumbent if self.incumbent is not None else self.fallback
-        return self.result("interrupted", best, lower=self.proved_below)
+        return self.result("interrupted", best, lower=self.proved_below, failure=INTERRUPTED)
 
     def infeasible(self) -> Result:
         """No schedule within the horizon cap: not a proof that none exists (a longer one may),
@@ -140,8 +141,8 @@ class Search:
         if self.fallback is not None:
             return self.result("feasible", self.fallback, lower=self.cap + 1)
         which = RESTRICTIONS[self.job.restriction][1] if self.job.restriction else "schedule"
-        self.stats["failure"] = f"no {which} with a makespan up to the horizon cap {self.cap}"
-        return self.result("unsolved", lower=self.cap + 1)
+        return self.result("unsolved", lower=self.cap + 1,
+                           failure=cap(f"no {which} with a makespan up to the horizon cap {self.cap}"))
 
     def optimal(self, T: int, model: Model, backend: Backend, outcome: Outcome) -> Result:
         """Horizon ``T`` is satisfiable and every one below it infeasible: the outcome's schedule

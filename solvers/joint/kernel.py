@@ -28,7 +28,8 @@ state is stored with their values sorted (:mod:`.search` proves this keeps the s
 
 ``dist[i, pose]`` is a lower bound on the steps robot ``i`` needs from ``pose`` to its goal
 cell, and ``U`` an upper bound to search below: a state at depth ``g`` with ``g + h >= U`` is
-not stored (:mod:`.search` proves ``h`` admissible).
+not stored (:mod:`.search` proves ``h`` admissible); ``counters[LEAST_CUT]`` keeps the least
+``g + h`` (or, for a robot's move cut on its own, ``g + dist + load``) of what was cut.
 """
 from __future__ import annotations
 
@@ -39,8 +40,9 @@ from .compiled import jit, connected, popcount, lookup
 WAIT, MOTION, PICK, PLACE = 0, 1, 2, 3  # bille.instances.moveset.Kind
 SEARCH, FIND, COLLECT = 0, 1, 2  # modes of expand
 DONE, GOAL, PAUSED, FULL, GROW = 0, 1, 2, 3, 4  # what expand returns
-# counters[]: states stored, entries in the hash table, goal row, leaves (joint actions valid)
-N_STATES, N_TABLE, GOAL_ROW, LEAVES, PRUNED = 0, 1, 2, 3, 4
+# counters[]: states stored, entries in the hash table, goal row, leaves (joint actions valid),
+# states cut below U, the least bound among what was cut
+N_STATES, N_TABLE, GOAL_ROW, LEAVES, PRUNED, LEAST_CUT = 0, 1, 2, 3, 4, 5
 TILE_BITS = 63
 
 
@@ -175,6 +177,7 @@ def expand(mode, states, parent, table, counters, cursor, hi, work, max_rows, de
                         continue
                     load = c
                 if big and depth + 1 + dist[i, s] + load >= U:
+                    counters[LEAST_CUT] = min(counters[LEAST_CUT], depth + 1 + dist[i, s] + load)
                     continue
                 cand[i, n] = a
                 n += 1
@@ -333,6 +336,7 @@ def expand(mode, states, parent, table, counters, cursor, hi, work, max_rows, de
                             h = best
                 if depth + 1 + h >= U:
                     counters[PRUNED] += 1
+                    counters[LEAST_CUT] = min(counters[LEAST_CUT], depth + 1 + h)
                     continue
             # the robots of a symmetry group in sorted order (raw order kept in vals for FIND)
             for s in range(sym_start.shape[0] - 1):

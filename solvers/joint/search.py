@@ -35,6 +35,17 @@ least ``g``, so dropping it loses no shorter occurrence. An exhausted search the
 no schedule of the class is shorter than ``U``; stopped early, that none is shorter than
 ``min(d + 1, U)``.
 
+**Deepening** (:func:`deepen`, where no schedule is known and the plain search did not decide
+in its share of the time). The search runs again and again below a bound ``U`` that rises. A
+run below ``U`` that is exhausted has cut some states (or some robot's moves, on that robot's
+term alone); let ``C >= U`` be the least bound among what it cut (``g + h``, or ``g + 1 + dist
++ load`` for a move). A schedule of makespan ``T`` passes only through states with ``g + h <=
+T`` and moves with ``g + 1 + dist + load <= T`` (the bounds are admissible), so one with ``T <
+C`` had nothing cut and would have been found: none has a makespan below ``C``. The next run
+searches below ``C + 1``. A run that reaches a goal has stored every state of every schedule
+shorter than its ``U``, each at its least depth, so the first goal it meets is an optimum; a
+run that is exhausted with nothing cut proves that the class has no schedule.
+
 **Interchangeable robots.** Robots with one moveset and no goal cell are stored in sorted order
 of their values (pose and load). Swapping two such robots maps the schedules from a state onto
 the schedules from the swapped state, action for action, with the same makespan (the rules and
@@ -101,6 +112,8 @@ def search(instance: Instance, cells: Cells, budget: Budget, *, U: int | None = 
         proved = min(depth + 1, bound)
         if max_steps is not None and depth >= max_steps:
             return _ended(out, "steps", proved, depth, store.counters)
+        if budget.expired():  # between layers too: a small layer may end before the kernel looks
+            return _ended(out, "cancelled" if budget.cancelled else "time", proved, depth, store.counters)
         got = store.layer(budget, rows, bound)
         if got == "goal":
             out = _ended(out, "goal", depth + 1, depth + 1, store.counters)
@@ -117,8 +130,37 @@ def search(instance: Instance, cells: Cells, budget: Budget, *, U: int | None = 
             return _ended(out, "exhausted", bound if U is not None else math.inf, depth + 1, store.counters)
 
 
+def deepen(instance: Instance, cells: Cells, budget: Budget, *, proved: int, max_states: int,
+           events: Events | None = None, tables: Tables, probe: float | None = None) -> Outcome | None:
+    """The search below a rising bound (module docstring, "Deepening"), from ``proved`` (no
+    schedule of the class is shorter: the plain search's proof). ``tables`` with the distances.
+    The outcome as :func:`search`'s; a stopped run proves at least ``proved``. ``probe``: seconds
+    for the first run; None if it does not end within them (deepening does not pay here)."""
+    U = proved + 1
+    states = 0
+    while True:
+        within = budget if probe is None or states else budget.child(probe)
+        out = search(instance, cells, within, U=U, max_states=max_states, events=events, tables=tables)
+        states += out.states
+        if within is not budget and out.stop == "time" and not budget.expired():
+            return None
+        if out.stop != "exhausted":
+            out.proved = max(out.proved, proved)
+            out.states = states
+            return out
+        if out.least_cut >= NO_BOUND:  # nothing cut: every state of the class was searched
+            out.proved, out.states = math.inf, states
+            return out
+        proved = int(out.least_cut)
+        if events is not None:
+            events.progress({"class": cells.key, "lower": proved, "best": None, "deepening": U,
+                             "elapsed": budget.elapsed()})
+        U = proved + 1
+
+
 def _ended(out: Outcome, stop: str, proved, depth: int, counters: np.ndarray) -> Outcome:
     out.stop, out.proved, out.depth = stop, proved, depth
+    out.least_cut = int(counters[kernel.LEAST_CUT])
     out.states = int(counters[kernel.N_STATES])
     out.leaves = int(counters[kernel.LEAVES])
     out.pruned = int(counters[kernel.PRUNED])

@@ -21,7 +21,9 @@ WORK = 1 << 16  # backtracking steps between two looks at the budget, over the r
 
 def new_counters() -> np.ndarray:
     """The counters :func:`.kernel.expand` keeps (their indices in :mod:`.kernel`)."""
-    return np.zeros(kernel.PRUNED + 1, dtype=np.int64)
+    counters = np.zeros(kernel.LEAST_CUT + 1, dtype=np.int64)
+    counters[kernel.LEAST_CUT] = NO_BOUND
+    return counters
 
 
 def work(t: Tables) -> int:
@@ -41,6 +43,7 @@ class Outcome:
     stop: str
     proved: int
     ids: np.ndarray | None = None
+    least_cut: int = NO_BOUND  # the least bound of a state cut below U (module .search, deepening)
     depth: int = 0
     states: int = 0
     leaves: int = 0

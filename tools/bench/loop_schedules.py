@@ -59,7 +59,7 @@ def fingerprint(inst, motion: str, horizon: int, transfer: bool) -> dict:
     result = reconfigure.plan(inst, temporal_astar.Options(horizon=horizon, load_transfer=transfer), motion=motion)
     stats = {k: v for k, v in result.stats.items() if k not in TIMINGS}
     ids = None if result.schedule is None else bind(inst, result.schedule)
-    return {"status": result.status, "failure": result.stats.get("failure"),
+    return {"status": result.status, "failure": None if result.failure is None else result.failure.text,
             "steps": None if ids is None else int(ids.shape[1]),
             "schedule": None if ids is None else digest(np.ascontiguousarray(ids, dtype=np.int64).tobytes()),
             "stats": digest(json.dumps(stats, sort_keys=True, default=str).encode())}

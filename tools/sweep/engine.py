@@ -214,6 +214,8 @@ def solve_in_child(outbox, text: str, method: str, options: dict, limits: Limits
             return
         m = result.metrics
         stats = {k: v for k, v in result.stats.items() if isinstance(v, (int, float, str, bool)) or v is None}
+        if result.failure is not None:  # why the run ended without its answer, in the row's stats
+            stats.update(failure=result.failure.text, failure_kind=result.failure.kind)
         expansions = next((int(result.stats[k]) for k in ("expansions", "nodes", "states")
                            if isinstance(result.stats.get(k), (int, float))), None)
         said = result.stats.get("violation") or result.stats.get("contradiction") if result.status == "error" else None
