@@ -70,7 +70,8 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
             return to_result(instance, "astar", status, unwind(parent, key), stats=stats, claim=CLAIM)
         stats["expanded"] += 1
         if stats["expanded"] > max_expansions:
-            return to_result(instance, "astar", "unsolved", None, stats=stats, claim=CLAIM, failure=cap("expansion cap"))
+            return to_result(instance, "astar", "unsolved", None, stats=stats, claim=CLAIM,
+                             failure=cap("expansion cap"))
         try:
             if budget.expired():
                 raise OutOfTime

@@ -96,8 +96,9 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
     schedule when the run's budget expires, status ``timeout`` (no run: no limit).
 
     Status ``optimal`` (of ``objective`` over walking schedules: the result's claim) when the
-    improvement exhausts the search space, ``feasible`` otherwise; ``unsolved`` when the space holds no walking schedule (a
-    schedule that moves tiles out of the way and back is outside it).
+    improvement exhausts the search space, ``feasible`` otherwise; ``unsolved`` when the space
+    holds no walking schedule (a schedule that moves tiles out of the way and back is outside
+    it).
     """
     o = options or Options()
     problem = JointProblem.of(instance, "lacam")
@@ -116,8 +117,8 @@ def joint_plan(problem: JointProblem, *, objective: str = "makespan", budget: Bu
                pinned: dict[int, frozenset] | None = None, progress=None) -> tuple[str, list | None, dict]:
     """LaCAM* on any :class:`JointProblem` within ``budget`` (None: no limit): ``(status, joint
     actions or None, stats)``, why there is no schedule in ``stats["failure"]`` (a
-    :class:`~bille.instances.failure.Failure`, for the result); ``progress`` (a run's progress receiver, or None) hears of each
-    cheaper schedule found.
+    :class:`~bille.instances.failure.Failure`, for the result); ``progress`` (a run's progress
+    receiver, or None) hears of each cheaper schedule found.
 
     ``pinned``: robots that wait in the first step while holding the given cells (the
     reconfiguration loop's picks and places, which replace those waits); the search space is

@@ -156,7 +156,8 @@ class Loop:
             self.stats = {k: self.stats[k] for k in WALKING}
         self.motion: Motion = MOTIONS[motion](o) if isinstance(motion, str) else motion
         # the paper's rules: the motion layer's replans spend the same budget (none with Q fixed)
-        self.motion.start(instance, self.stats, (self.max_shifts if o.shift_priorities else 0) if self.path_planning else None)
+        shifts = (self.max_shifts if o.shift_priorities else 0) if self.path_planning else None
+        self.motion.start(instance, self.stats, shifts)
         self.allocation = Allocation(active)
         self.transfer = LoadTransfer(instance, o.d_tr, self.stats) if o.load_transfer else None
         self.manipulation = Manipulation(instance, self.s, self.stats)

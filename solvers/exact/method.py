@@ -188,9 +188,9 @@ def makespan_search(job: Job, instance: Instance, run: Run | None, max_makespan:
         return search.result("unsolved", failure=no_schedule(f"no {RESTRICTIONS[job.restriction][1]} exists: "
                                                              f"{'; '.join(within.why)}"))
     if cap < start:  # the class's bound is already above the cap
+        which = RESTRICTIONS[job.restriction][1]
         return search.result("unsolved", lower=start, failure=Failure(
-            "cap", f"no {RESTRICTIONS[job.restriction][1]} with a makespan up to the horizon cap {cap}: its class needs "
-                   f"{start}"))
+            "cap", f"no {which} with a makespan up to the horizon cap {cap}: its class needs {start}"))
     if goal_violation(instance.world, instance.start_state, instance.goal_tiles, instance.goal_cells, 0) is None:
         search.stats["tiles_traveled_optimal"] = True
         return search.result("optimal", np.zeros((instance.num_robots, 0), dtype=np.int64), lower=0)
