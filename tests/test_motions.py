@@ -83,9 +83,12 @@ def test_obstacles_block_feet_and_swept_cells():
 
 
 @pytest.mark.parametrize("name", ["crowded-2", "lt-1", "compare-4", "point-4"])
-def test_small_graphs_walk_the_same_distances_without_scipy(name, monkeypatch):
+def test_the_python_and_the_compiled_search_walk_the_same_distances(name, monkeypatch):
     # below SMALL_GRAPH poses the distances come from a Python breadth-first search, above from
-    # scipy's: both on every bundled structure tried, to every cell and from many poses
+    # the compiled one: both, and scipy's Dijkstra, on every bundled structure tried, to every
+    # cell and from many poses
+    from scipy.sparse.csgraph import dijkstra
+
     from bille.instances import load_instance, walking
     from bille.instances.bundled import bundled_path
 
@@ -94,9 +97,16 @@ def test_small_graphs_walk_the_same_distances_without_scipy(name, monkeypatch):
     tiles = np.asarray(inst.start.tiles)
     for carrying in (False, True):
         tables = []
-        for small in (10**9, 0):
+        for small, large in ((10**9, 10**9), (0, 0), (0, 10**9)):  # Python, compiled, scipy (numba unloaded)
             monkeypatch.setattr(walking, "SMALL_GRAPH", small)
+            monkeypatch.setattr(walking, "LARGE_GRAPH", large)
+            monkeypatch.setattr(walking.Walk, "_compiled", lambda self: self.succ.shape[0] >= walking.LARGE_GRAPH)
             walk = walking.Walk(graph, tiles, carrying)
             poses = range(0, walk.succ.shape[0], max(1, walk.succ.shape[0] // 40))
             tables.append([walk.distances(c) for c in range(tiles.size)] + [walk.from_pose(p) for p in poses])
-        assert all(np.array_equal(a, b) for a, b in zip(*tables))
+        assert all(np.array_equal(a, b) for a, b in zip(tables[0], tables[1]))
+        assert all(np.array_equal(a, b) for a, b in zip(tables[0], tables[2]))
+        scipy = [dijkstra(walk._reverse_graph(), indices=walk.goal_poses(c), unweighted=True, min_only=True)
+                 if len(walk.goal_poses(c)) else np.full(walk.succ.shape[0], np.inf) for c in range(tiles.size)]
+        assert all(np.array_equal(np.where(np.isfinite(s), s, walking.UNREACHABLE), t)
+                   for s, t in zip(scipy, tables[0]))

@@ -17,24 +17,15 @@ from __future__ import annotations
 import heapq
 
 import numpy as np
-from numba import njit, types
+from numba import types
 from numba.typed import Dict
+
+from bille.instances.jit import jit
 
 NEVER = 1 << 30  # no path ends on the cell
 loaded = False  # whether a search has run in this process (the kernels are loaded)
 
-
-def _compiled(function):
-    """``function`` compiled, its machine code cached on disk where Numba finds a writable place
-    (beside this file, or in the user's cache); compiled again in each process where it finds
-    none."""
-    try:
-        return njit(cache=True)(function)
-    except RuntimeError:  # Numba: "cannot cache function ...: no locator available"
-        return njit(function)
-
-
-@_compiled
+@jit
 def _cost(at, moved, end, P, v, u, t):  # pragma: no cover - compiled
     """Collisions of a step from ``v`` at ``t`` to ``u`` at ``t + 1``."""
     n = at[(t + 1) * P + u]
@@ -46,7 +37,7 @@ def _cost(at, moved, end, P, v, u, t):  # pragma: no cover - compiled
     return n
 
 
-@_compiled
+@jit
 def _after(at, P, v, last, horizon):  # pragma: no cover - compiled
     """Robots passing ``v`` after a path ended there at step ``last``."""
     n = 0
@@ -55,7 +46,7 @@ def _after(at, P, v, last, horizon):  # pragma: no cover - compiled
     return n
 
 
-@_compiled
+@jit
 def _enroll(at, moved, end, path, P, horizon):  # pragma: no cover - compiled
     """Add ``path``; returns (its collisions with the paths already in, the new horizon)."""
     n = 0
@@ -73,7 +64,7 @@ def _enroll(at, moved, end, path, P, horizon):  # pragma: no cover - compiled
     return n + _after(at, P, path[last], last, horizon), horizon
 
 
-@_compiled
+@jit
 def _clear(at, moved, end, path, P, horizon):  # pragma: no cover - compiled
     """Take ``path`` out; returns its collisions with the paths left."""
     n = 0
@@ -94,7 +85,7 @@ def _clear(at, moved, end, path, P, horizon):  # pragma: no cover - compiled
     return n + _after(at, P, path[last], last, horizon)
 
 
-@_compiled
+@jit
 def _meets(at, moved, end, path, P, horizon):  # pragma: no cover - compiled
     n = 0
     for t in range(1, len(path)):
@@ -103,7 +94,7 @@ def _meets(at, moved, end, path, P, horizon):  # pragma: no cover - compiled
     return n + _after(at, P, path[last], last, horizon)
 
 
-@_compiled
+@jit
 def _search(nbr, dist, start, goal, bound, at, moved, end, P, closed, parent, stamp):  # pragma: no cover
     """:func:`.scatter._path` (the same order of expansion): a heap entry is ``(order key,
     u * P + parent)`` with the order key ``(collisions * F + f) * F + F - 1 - g``."""

@@ -3,15 +3,8 @@ over row numbers + 1), bit counts and the connectivity flood fill (rule 5)."""
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
-
-def jit(function):
-    """``function`` compiled, its machine code cached on disk where Numba finds a writable place."""
-    try:
-        return njit(cache=True)(function)
-    except RuntimeError:  # Numba: "cannot cache function ...: no locator available"
-        return njit(function)
+from bille.instances.jit import jit
 
 
 @jit
