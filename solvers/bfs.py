@@ -41,9 +41,10 @@ from .joint.cells import CLASS_KEYS, KINDS, Cells, cells_of
 # estimated joint states up to which engine=auto runs the Python twin: crowded-2 (1.8 x 10^4,
 # 133 states stored) takes it 0.004 s, the compiled search 0.5 s with its loading
 PYTHON_SMALL = 50_000
-# of the time limit, the plain search's before deepening (lt-1's keep class takes it 1.4 s; lt-7's,
-# three robots, reaches depth 8 of 13 in a minute plain, and deepening decides it in 30 s)
-PLAIN_SHARE = 0.2
+# with deepen, the plain search's time before it deepens: this share of the time limit, and at
+# least PLAIN_MIN seconds (up to half of the limit), where the classes whose bound is far below
+# their optimum are decided (lt-1's keep class: 1.4-2.2 s)
+PLAIN_SHARE, PLAIN_MIN = 0.05, 5.0
 
 
 @dataclass(frozen=True)
@@ -60,8 +61,9 @@ class Options(MethodOptions):
     ``direction``: ``forward`` from the start, ``both`` from the start and back from the goal
     states (:mod:`.joint.bidirectional`), ``auto`` both where the goal states can be listed and no
     incumbent is given (its pruning works forward). ``deepen``: where no incumbent is given and the
-    search has not decided in :data:`PLAIN_SHARE` of the time limit, search again below a rising bound (:func:`.joint.search.deepen`), which decides classes whose
-    bound is close to their optimum (short schedules of several robots)."""
+    search has not decided in a share of the time limit (:data:`PLAIN_SHARE`), search below a
+    rising bound with the rest (:func:`.joint.search.deepen`): that decides classes whose bound is
+    close to their optimum (short schedules of several robots) and slows the others down."""
 
     METHOD = "bfs"
     cells: str = option("all", choices=KINDS,
@@ -80,8 +82,8 @@ class Options(MethodOptions):
     direction: str = option("auto", choices=("auto", "forward", "both"),
                             help="forward, both (also back from the goal states) or auto (both where they can be "
                                  "listed)")
-    deepen: bool = option(True, help="without an incumbent, when the plain search has not decided in a fifth of the "
-                                     "time limit: search again below a rising bound")
+    deepen: bool = option(False, help="without an incumbent, when the plain search has not decided in 5 % of the time "
+                                      "limit (at least 5 s): search below a rising bound with the rest")
 
     @property
     def plain(self) -> bool:
@@ -134,11 +136,16 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
         raise OptionError(f"bfs: max_states {max_states:,} needs about {human(max_states * per)}, more than the "
                           f"{human(room)} this machine allows (BILLE_MEMORY_GIB sets it)")
     deepening = options.deepen and upper is None and options.max_steps is None
-    out = search(instance, cells, budget.share(PLAIN_SHARE) if deepening else budget, U=upper,
-                 max_states=max_states, max_steps=options.max_steps, events=run.events, tables=tables,
-                 direction=direction)
+    out = search(instance, cells, _plain_share(budget) if deepening else budget, U=upper, max_states=max_states,
+                 max_steps=options.max_steps, events=run.events, tables=tables, direction=direction)
     if deepening and out.stop == "time" and not budget.expired():  # its share spent, not the whole limit
-        out = _deepened(instance, cells, out, budget, max_states, run.events, tables, direction)
+        from .joint.search import deepen
+
+        proved = int(out.proved)
+        out = deepen(instance, cells, budget, proved=proved, max_states=max_states, events=run.events,
+                     tables=compile_tables(instance, cells, distances=True))
+        if out.stop not in ("goal", "exhausted"):
+            out.proved = max(out.proved, proved)
     result = _result(instance, cells, out, upper, incumbent, options, budget)
     if result.schedule is not None:
         run.events.schedule(result.schedule)
@@ -151,23 +158,9 @@ def _tiny(instance: Instance) -> bool:
     return joint_states(instance) <= PYTHON_SMALL
 
 
-def _deepened(instance: Instance, cells: Cells, plain, budget, max_states: int, events, tables, direction: str):
-    """After the plain search's share: deepening (:func:`.joint.search.deepen`) if its first run,
-    below one more than the plain search proved, ends within a quarter of the time the plain
-    search took (it then cuts most of what the plain search stores); else the plain search again
-    with the time left. The better proof of the two is kept."""
-    from .joint.search import deepen, search
-    from .joint.tables import compile_tables
-
-    spent = budget.elapsed()
-    out = deepen(instance, cells, budget, proved=int(plain.proved), max_states=max_states, events=events,
-                 tables=compile_tables(instance, cells, distances=True), probe=spent / 4)
-    if out is None:
-        out = search(instance, cells, budget, max_states=max_states, events=events, tables=tables,
-                     direction=direction)
-    if out.stop not in ("goal", "exhausted"):
-        out.proved = max(out.proved, plain.proved)
-    return out
+def _plain_share(budget):
+    left = budget.seconds()
+    return budget if left is None else budget.child(max(PLAIN_SHARE * left, min(PLAIN_MIN, left / 2)))
 
 
 def _direction(options: Options, upper: int | None) -> str:

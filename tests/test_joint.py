@@ -268,7 +268,7 @@ def test_deepening_finds_the_optimum_of_each_class():
     checked = 0
     for inst in tiny_instances(40):
         for kind in ("all", "keep"):
-            plain = bfs(inst, cells=kind, deepen=False)
+            plain = bfs(inst, cells=kind)
             cells = cells_of(inst, kind)
             bounds = []
             events = Events(on_progress=lambda p: bounds.append(p["lower"]) if "deepening" in p else None)
@@ -286,18 +286,19 @@ def test_deepening_finds_the_optimum_of_each_class():
 
 
 def test_a_search_that_does_not_decide_in_its_share_deepens(monkeypatch):
-    """The plain search gets a share of the time limit (none here: it stops at once), then the
-    search deepens: the same optimum, a valid schedule."""
+    """Asked to deepen, the plain search gets a share of the time limit (none here: it stops at
+    once), then the search deepens: the same optimum, a valid schedule."""
     from bille.solvers import bfs as bfs_module
 
     monkeypatch.setattr(bfs_module, "PLAIN_SHARE", 0.0)
+    monkeypatch.setattr(bfs_module, "PLAIN_MIN", 0.0)
     deepened = 0
     for inst in tiny_instances(12):
-        plain = bfs(inst, cells="keep", deepen=False)
+        plain = bfs(inst, cells="keep")
         if plain.status != "optimal" or plain.metrics.makespan < 2:
             continue
         events = []
-        got = plan(inst, Options(engine="compiled", cells="keep"),
+        got = plan(inst, Options(engine="compiled", cells="keep", deepen=True),
                    run=Run(Budget(60.0), Events(on_progress=events.append)))
         report = validate(inst, got.schedule)
         assert got.status == "optimal" and report.valid, inst.name

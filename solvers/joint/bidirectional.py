@@ -115,7 +115,10 @@ def search_both(instance: Instance, cells: Cells, t: Tables, goals: np.ndarray, 
             return ended("steps", proved)
         side, other = (fwd, bwd) if fwd.hi - fwd.lo <= bwd.hi - bwd.lo else (bwd, fwd)
         lo = side.hi
-        got = side.layer(budget, min(rows, max_states - other.stored))
+        if budget.expired():  # between layers too, as forward
+            got = "cancelled" if budget.cancelled else "time"
+        else:
+            got = side.layer(budget, min(rows, max_states - other.stored))
         while got == "goal":  # a goal state stored from the start: the sides meet in this layer
             got = side.layer(budget, min(rows, max_states - other.stored))
         if got != "done":

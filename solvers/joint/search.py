@@ -35,8 +35,8 @@ least ``g``, so dropping it loses no shorter occurrence. An exhausted search the
 no schedule of the class is shorter than ``U``; stopped early, that none is shorter than
 ``min(d + 1, U)``.
 
-**Deepening** (:func:`deepen`, where no schedule is known and the plain search did not decide
-in its share of the time). The search runs again and again below a bound ``U`` that rises. A
+**Deepening** (:func:`deepen`, asked for where no schedule is known, after the plain search's
+share of the time). The search runs again and again below a bound ``U`` that rises. A
 run below ``U`` that is exhausted has cut some states (or some robot's moves, on that robot's
 term alone); let ``C >= U`` be the least bound among what it cut (``g + h``, or ``g + 1 + dist
 + load`` for a move). A schedule of makespan ``T`` passes only through states with ``g + h <=
@@ -131,19 +131,15 @@ def search(instance: Instance, cells: Cells, budget: Budget, *, U: int | None = 
 
 
 def deepen(instance: Instance, cells: Cells, budget: Budget, *, proved: int, max_states: int,
-           events: Events | None = None, tables: Tables, probe: float | None = None) -> Outcome | None:
+           events: Events | None = None, tables: Tables) -> Outcome:
     """The search below a rising bound (module docstring, "Deepening"), from ``proved`` (no
     schedule of the class is shorter: the plain search's proof). ``tables`` with the distances.
-    The outcome as :func:`search`'s; a stopped run proves at least ``proved``. ``probe``: seconds
-    for the first run; None if it does not end within them (deepening does not pay here)."""
+    The outcome as :func:`search`'s; a stopped run proves at least ``proved``."""
     U = proved + 1
     states = 0
     while True:
-        within = budget if probe is None or states else budget.child(probe)
-        out = search(instance, cells, within, U=U, max_states=max_states, events=events, tables=tables)
+        out = search(instance, cells, budget, U=U, max_states=max_states, events=events, tables=tables)
         states += out.states
-        if within is not budget and out.stop == "time" and not budget.expired():
-            return None
         if out.stop != "exhausted":
             out.proved = max(out.proved, proved)
             out.states = states
