@@ -26,17 +26,8 @@ class Failure:
         if self.kind not in KINDS:
             raise ValueError(f"unknown failure kind {self.kind!r} (expected one of {KINDS})")
 
-    @property
-    def budget(self) -> bool:
-        """Whether the run's budget ended it (its time limit or Ctrl-C), not the method."""
-        return self.kind in ("time-limit", "interrupted")
-
     def to_json(self) -> dict:
         return {"kind": self.kind, "text": self.text}
-
-    @classmethod
-    def from_json(cls, data: dict | None) -> Failure | None:
-        return None if not data else cls(data["kind"], data["text"])
 
     def __str__(self) -> str:
         return self.text

@@ -48,3 +48,21 @@ def test_restricted_optima_are_never_bare_optimal():
     assert seen["mstar{}"][0] == seen["astar{}"][0] == "optimal-sum-of-costs-walking-only"
     assert seen["mstar{}"][1] > 10
     assert seen["bfs{'cells': 'keep'}"][0] == "optimal-in-class"
+
+
+def test_a_failure_says_its_kind_for_code_and_its_text_for_people():
+    from helpers import make
+
+    from bille.instances.failure import Failure
+    from bille.instances.run import Budget
+
+    with pytest.raises(ValueError, match="unknown failure kind"):
+        Failure("oops", "text")
+    inst = make("TTTTTTTT", [{"at": [0, 0]}], moveset="point", robot_goals=[[7, 0]])
+    capped = solve(inst, "bfs", engine="compiled", max_steps=3)
+    assert capped.status == "unsolved" and capped.failure == Failure("cap", "step bound")
+    assert capped.to_json()["failure"] == {"kind": "cap", "text": "step bound"}
+    late = solve(load_instance(bundled_path("lt-1")), "bfs", budget=Budget(0.0))
+    assert late.status == "timeout" and late.failure.kind == "time-limit"
+    keep = solve(inst, "bfs", engine="compiled", cells="keep", max_steps=3)
+    assert keep.failure.kind == "cap" and keep.claim.lower == 4

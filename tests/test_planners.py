@@ -4,6 +4,7 @@ import pytest
 
 from bille.instances import OptionError, load_instance
 from bille.instances.bundled import bundled_path
+from bille.instances.failure import Failure
 from bille.solvers import solve, validate
 from helpers import make
 from refsearch import optimal_soc
@@ -79,7 +80,7 @@ def test_priority_shifting_resolves_a_deadlock_that_fixed_priorities_cannot():
     # of its way and must be let through first, while robot 0 waits in the side branch
     inst = make(DEAD_END["grid"], DEAD_END["robots"], robot_goals=DEAD_END["robot_goals"])
     fixed = solve(inst, "temporal-astar", horizon=5, shift_priorities=False)
-    assert fixed.status == "unsolved" and fixed.failure.text == "deadlock"
+    assert fixed.status == "unsolved" and fixed.failure == Failure("stuck", "deadlock")
     shifting = solve(inst, "temporal-astar", horizon=5)
     assert shifting.status == "feasible" and shifting.stats["priority_shifts"] >= 1
     assert validate(inst, shifting.schedule).valid
