@@ -9,7 +9,7 @@ from bille.heuristics.loop.goals import Goals
 from bille.heuristics.loop.manipulation import Manipulation
 from bille.heuristics.loop import reconfigure
 from bille.heuristics.loop.motion import MOTIONS, TemporalAStar
-from bille.heuristics.loop.reconfigure import Leg, Loop, LoopState
+from bille.heuristics.loop.reconfigure import DEADLOCK, Leg, Loop, LoopState
 from bille.heuristics.loop.sequence import NoSequence, SequenceError, check, derive, sequence_of
 from bille.heuristics.loop.transfer import LoadTransfer
 from bille.heuristics.temporal_astar import Options as LoopRecord
@@ -440,7 +440,7 @@ def test_where_every_robot_blocks_the_others_fewer_robots_finish():
 
     inst = random_reconfiguration(10, 8, 30, 4, 10, seed=6)
     for transfer in (False, True):
-        assert plan(inst, load_transfer=transfer).stats["failure"] == "deadlock"
+        assert plan(inst, load_transfer=transfer).failure == DEADLOCK
     found = fewer_robots(inst, None)
     assert found is not None and "+robots" in found.method
     schedule = Schedule.from_ids(inst, found.ids)
