@@ -282,6 +282,44 @@ def test_the_compiled_suo_table_gives_the_python_tables_paths(agents, seed):
     assert sum(len(nxt) - problem.dist_lists[i][s] for i, (nxt, s) in enumerate(zip(runs[True], problem.start))) > 0
 
 
+@pytest.mark.parametrize("name, agents", [("room-32-32-4", 150), ("random-32-32-10", 200)])
+def test_the_compiled_generator_gives_the_python_generators_configurations(name, agents):
+    # the same PIBT twice (heuristics/lacam/pibt_compiled.py compiles it): from the same random
+    # state, the same configurations (or the same refusal) under the same constraints, the random
+    # state left alike, and the same moves left open by forced ones; along a run of configurations
+    from bille.heuristics.joint import JointProblem
+    from bille.heuristics.lacam.pibt import Classic
+    from bille.heuristics.lacam.pibt_compiled import CompiledClassic
+    from bille.heuristics.lacam.scatter import scatter
+    from bille.instances.generators.movingai import from_movingai
+    from bille.tools.bench.maps import shipped_maps
+
+    folder = shipped_maps()
+    inst = from_movingai(folder / f"{name}.map", folder / f"{name}-random-1.scen", agents=agents)
+    problem = JointProblem.of(inst, "lacam")
+    python, compiled = Classic(problem, Random(1)), CompiledClassic(problem, Random(1))
+    goals = [int(w.goal_poses(c)[0]) for w, c in zip(problem.walks, problem.goals)]
+    python.prefer = compiled.prefer = scatter(python.nbrs, problem.dist_lists, list(problem.start), goals,
+                                              arrays=problem.dists)
+    config, rng, refused = tuple(problem.start), Random(5), 0
+    for step in range(40):
+        order = list(range(agents))
+        rng.shuffle(order)
+        forced = ()
+        if step % 3 == 0:  # a constraint: one robot's move fixed, as the search's tree sets them
+            i = rng.randrange(agents)
+            forced = ((i, rng.randrange(len(problem.moves(i, config[i])))),)
+            j = rng.randrange(agents)
+            assert python.compatible(config, forced, j) == compiled.compatible(config, forced, j)
+        got = python.generate(config, order, forced, {})
+        assert compiled.generate(config, order, forced, {}) == got, step
+        assert python.rng.getstate() == compiled.rng.getstate()
+        refused += got is None
+        if got is not None and not forced:
+            config = got[1]
+    assert config != tuple(problem.start) and refused < 40
+
+
 def test_suo_makes_lacam_spread_robots_on_a_benchmark_map():
     from bille.heuristics.lacam import search as lacam
     from bille.instances.generators.movingai import from_movingai

@@ -5,13 +5,14 @@ objective, and under classic collisions the SUO paths (:mod:`.scatter`) and thei
 from __future__ import annotations
 
 import random
+import sys
 
 from bille.instances.run import Budget
 
 from ..joint import JointProblem
 from .pibt import Bille, Classic
 from .refine import Paths, refine_once
-from .scatter import scatter
+from .scatter import COMPILED_FROM, scatter
 
 SCATTER_MARGIN = 10  # steps an SUO path may take beyond the shortest (lacam3's default)
 Poses = tuple[int, ...]
@@ -27,10 +28,15 @@ class PoseSpace:
         self.makespan = objective == "makespan"
         self.classic = problem.instance.collisions == "classic"
         self.refining = False  # no refinement (:meth:`refine`) until the SUO paths are set
-        self.generator = (Classic if self.classic else Bille)(problem, rng)
         # the SUO paths and their refinement walk on one set of neighbours, so only where every
         # robot walks alike (one moveset, one load): another robot's moves may not be among them
         self.alike = len({id(w) for w in problem.walks}) <= 1
+        self.generator = (Classic if self.classic else Bille)(problem, rng)
+        large = self.m * problem.walks[0].succ.shape[0] >= COMPILED_FROM
+        if self.classic and self.alike and (large or "numba" in sys.modules):  # loading Numba costs 0.3 s
+            from .pibt_compiled import CompiledClassic  # the same configurations, compiled
+
+            self.generator = CompiledClassic(problem, rng)
 
     def spread(self, budget: Budget, seed: int) -> None:
         """Classic collisions: the generator prefers each robot's next cell on its SUO path
