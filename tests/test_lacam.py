@@ -408,3 +408,14 @@ def test_an_unreachable_goal_is_said_before_any_path_is_spread():
                 robot_goals=[[4, 0], [3, 1]])
     result = solve(inst, "lacam", time_limit=10)
     assert result.status == "unsolved" and result.failure.text == "unreachable"
+
+
+@pytest.mark.parametrize("collisions", ["classic", "bille"])
+def test_no_robots_under_either_rule_is_solved_in_no_steps(collisions):
+    # with Numba loaded (the compiled generator's condition), an empty fleet is done at once
+    import numba  # noqa: F401 - loaded, as in a process that has compiled something
+
+    inst = make("TTT\nT.T", [], moveset="point", collisions=collisions)
+    found = solve(inst, "lacam")
+    assert found.status in ("optimal", "feasible") and found.metrics.makespan == 0
+    assert validate(inst, found.schedule).valid

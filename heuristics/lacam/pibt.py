@@ -212,9 +212,10 @@ class Classic(_Generator):
         super().__init__(problem, rng)
         self._configs = LRU(64)
         self.prefer: list[dict[int, int]] | None = None  # per robot: its SUO path's next cell (.scatter)
-        walk = problem.walks[0]
-        self.nbrs = [[q for q in row if q >= 0 and q != v] if standing else []
-                     for v, (row, standing) in enumerate(zip(walk.succ.tolist(), walk.standing.tolist()))]
+        walk = problem.walks[0] if problem.walks else None  # no robot: nothing to generate
+        self.nbrs = [] if walk is None else [
+            [q for q in row if q >= 0 and q != v] if standing else []
+            for v, (row, standing) in enumerate(zip(walk.succ.tolist(), walk.standing.tolist()))]
 
     def _prepare(self, config: Poses) -> tuple[list, dict[int, int]]:
         """Every robot's moves at ``config`` and the robot at each cell (kept for the

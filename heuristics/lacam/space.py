@@ -32,8 +32,8 @@ class PoseSpace:
         # robot walks alike (one moveset, one load): another robot's moves may not be among them
         self.alike = len({id(w) for w in problem.walks}) <= 1
         self.generator = (Classic if self.classic else Bille)(problem, rng)
-        large = self.m * problem.walks[0].succ.shape[0] >= COMPILED_FROM
-        if self.classic and self.alike and (large or "numba" in sys.modules):  # loading Numba costs 0.3 s
+        large = self.m > 0 and self.m * problem.walks[0].succ.shape[0] >= COMPILED_FROM
+        if self.classic and self.alike and self.m > 0 and (large or "numba" in sys.modules):  # Numba loads in 0.3 s
             from .pibt_compiled import CompiledClassic  # the same configurations, compiled
 
             self.generator = CompiledClassic(problem, rng)
