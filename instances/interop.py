@@ -303,6 +303,3 @@ def _moves(name: str, timed: list, makespan: int, src: Source) -> tuple[str, ...
     return tuple(row + ["wait"] * (makespan - len(row)))
 
 
-def mrp_name(path: str | Path) -> bool:
-    """Whether a file name asks for libMultiRobotPlanning YAML (``*.mrp.yaml``)."""
-    return Path(path).name.endswith((".mrp.yaml", ".mrp.yml"))

@@ -90,6 +90,12 @@ def _yaml_failure(exc: yaml.YAMLError, src: Source) -> BilleError:
     return src.fail((), f"YAML syntax error: {what}", mark.line + 1 if mark else None)
 
 
+def mrp_name(path: str | Path) -> bool:
+    """Whether a file name asks for libMultiRobotPlanning YAML (``*.mrp.yaml``; the format is
+    :mod:`.interop`'s, the name is read here so that reading a bille file does not load it)."""
+    return Path(path).name.endswith((".mrp.yaml", ".mrp.yml"))
+
+
 def load_yaml_file(path: str | Path, error: type[BilleError]) -> tuple[Any, Source]:
     """Read and parse a YAML file; unreadable files raise ``error`` naming the path."""
     path = Path(path)

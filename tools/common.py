@@ -19,8 +19,7 @@ def instance_arg(arg: str, *, check: bool = True):
     """An instance from a file or a bundled name: bille YAML, libMultiRobotPlanning YAML (named
     ``*.mrp.yaml``, or recognized by its ``map`` and ``agents``) or a MovingAI ``.scen`` (every
     agent of it, on the ``.map`` it names)."""
-    from bille.instances.interop import from_mrp, is_mrp, mrp_name
-    from bille.instances.yamlsource import load_yaml_file
+    from bille.instances.yamlsource import load_yaml_file, mrp_name
 
     path = resolve(arg, InstanceError)
     if path.suffix == ".scen":
@@ -31,8 +30,12 @@ def instance_arg(arg: str, *, check: bool = True):
         try:
             return load_instance(path, check=check)
         except InstanceError:
+            from bille.instances.interop import is_mrp
+
             if not is_mrp(_yaml_or_none(path)):
                 raise
+    from bille.instances.interop import from_mrp
+
     data, src = load_yaml_file(path, InstanceError)
     return from_mrp(data, path.name.split(".")[0], src)
 

@@ -7,10 +7,10 @@ import click
 
 from bille.instances import InstanceError, ScheduleError, dump_instance, load_instance
 from bille.instances.files import write_atomic
-from bille.instances.interop import (from_mrp, is_mrp, map_text, mrp_name, scen_text, schedule_from_mrp,
+from bille.instances.interop import (from_mrp, is_mrp, map_text, scen_text, schedule_from_mrp,
                                      schedule_to_mrp, to_mrp)
 from bille.instances.schedule import dump_schedule, load_schedule, written_for
-from bille.instances.yamlsource import load_yaml_file
+from bille.instances.yamlsource import load_yaml_file, mrp_name
 
 from .common import EXIT_OK, instance_arg, writable
 
