@@ -46,6 +46,7 @@ def test_a_tiny_solve_without_a_bound_imports_no_solver_library():
     for argv, modules in zip(commands, loaded):
         heavy = sorted(m for m in modules if any(m == h or m.startswith(h + ".") for h in (*HEAVY, "numba")))
         assert not heavy, f"bille {' '.join(argv)} imported {heavy}"
+        assert "bille.instances.interop" not in modules  # a bille file needs no reader of other formats
 
 
 def test_a_method_is_imported_when_it_is_first_used():
