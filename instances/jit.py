@@ -2,6 +2,14 @@
 import this where they are used: loading Numba takes a few tenths of a second)."""
 from __future__ import annotations
 
+import sys
+
+
+def loaded() -> bool:
+    """Whether this process has loaded Numba already: compiled code then costs no start-up, so
+    it may serve problems smaller than those worth loading Numba for."""
+    return "numba" in sys.modules
+
 
 def jit(function):
     """``function`` compiled, its machine code cached where Numba finds a writable place (beside

@@ -11,11 +11,11 @@ poses the caller names.
 """
 from __future__ import annotations
 
-import sys
 from collections import deque
 
 import numpy as np
 
+from .jit import loaded
 from .lru import LRU
 from .moveset import Kind
 from .posegraph import PoseGraph
@@ -195,7 +195,7 @@ class Walk:
 
     def _compiled(self) -> bool:
         """Whether the compiled search finds the distances (module comment on SMALL_GRAPH)."""
-        return self.succ.shape[0] >= LARGE_GRAPH or "numba" in sys.modules
+        return self.succ.shape[0] >= LARGE_GRAPH or loaded()
 
     def _csr(self, reverse: bool) -> tuple[np.ndarray, np.ndarray]:
         """The moves (``reverse``: from the pose moved to to the pose moved from) as CSR arrays,

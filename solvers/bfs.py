@@ -141,11 +141,8 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
     if deepening and out.stop == "time" and not budget.expired():  # its share spent, not the whole limit
         from .joint.search import deepen
 
-        proved = int(out.proved)
-        out = deepen(instance, cells, budget, proved=proved, max_states=max_states, events=run.events,
-                     tables=compile_tables(instance, cells, distances=True))
-        if out.stop not in ("goal", "exhausted"):
-            out.proved = max(out.proved, proved)
+        out = deepen(instance, cells, budget, proved=int(out.proved), max_states=max_states, events=run.events,
+                     tables=compile_tables(instance, cells, distances=True))  # keeps the better proof
     result = _result(instance, cells, out, upper, incumbent, options, budget)
     if result.schedule is not None:
         run.events.schedule(result.schedule)

@@ -87,7 +87,8 @@ class CompiledClassic(Classic):
                  pinned: dict[int, frozenset]) -> tuple[tuple[int, ...], Poses] | None:
         m = len(config)
         at = np.array(config, dtype=np.int64)
-        draws = self._mersenne(self.rng.getstate())
+        state = self.rng.getstate()  # the search's random state: untouched until set below
+        draws = self._mersenne(state)
         rnd = draws.random_sample(int(self.move_n[at].sum()))
         forced_i = np.array([i for i, _ in forced], dtype=np.int64)
         forced_k = np.array([k for _, k in forced], dtype=np.int64)
@@ -96,7 +97,6 @@ class CompiledClassic(Classic):
         ok = _generate(at, np.array(order, dtype=np.int64), forced_i, forced_k, self.move_q, self.move_n,
                        self.dist, self.home, self.nbr, self.nbr_n, self._prefer_arrays(), rnd, used,
                        self.here, self.next_at, choice)
-        state = self.rng.getstate()
         later = self._mersenne(state)
         later.random_sample(int(used[0]))  # the Python generator's state after as many draws
         _, keys, pos, _, _ = later.get_state()

@@ -5,8 +5,8 @@ objective, and under classic collisions the SUO paths (:mod:`.scatter`) and thei
 from __future__ import annotations
 
 import random
-import sys
 
+from bille.instances.jit import loaded
 from bille.instances.run import Budget
 
 from ..joint import JointProblem
@@ -33,7 +33,7 @@ class PoseSpace:
         self.alike = len({id(w) for w in problem.walks}) <= 1
         self.generator = (Classic if self.classic else Bille)(problem, rng)
         large = self.m > 0 and self.m * problem.walks[0].succ.shape[0] >= COMPILED_FROM
-        if self.classic and self.alike and self.m > 0 and (large or "numba" in sys.modules):  # Numba loads in 0.3 s
+        if self.classic and self.alike and self.m > 0 and (large or loaded()):  # Numba loads in 0.3 s
             from .pibt_compiled import CompiledClassic  # the same configurations, compiled
 
             self.generator = CompiledClassic(problem, rng)
