@@ -2,7 +2,9 @@
 against the same class searched without an incumbent (no pruning), on tiny instances."""
 import pytest
 
+from bille.instances.bundled import bundled_path
 from bille.instances.grid import articulation_points
+from bille.instances.instance import load_instance
 from bille.instances.run import Budget
 from bille.solvers import solve
 from bille.solvers.anytime.ladder import RUNG, candidates, climb
@@ -22,6 +24,31 @@ def test_the_candidates_can_be_lifted_and_set_back(inst):
     for x, y in cells:
         c = y * inst.width + x
         assert start[c] and goal[c] and not cut[c]
+
+
+def _in_line(inst, cut, x, y):
+    """Whether (x, y) goes on straight from a run of two cut cells, over tiles."""
+    tiles = inst.start.tiles | inst.goal_tiles
+    w = inst.width
+    for dx, dy in ((1, 0), (-1, 0), (0, 1), (0, -1)):
+        cx, cy = x - dx, y - dy
+        while 0 <= cx < w and 0 <= cy < inst.height and tiles[cy * w + cx]:
+            bx, by = cx - dx, cy - dy
+            if cut[cy * w + cx] and 0 <= bx < w and 0 <= by < inst.height and cut[by * w + bx]:
+                return True
+            cx, cy = bx, by
+    return False
+
+
+@pytest.mark.parametrize("inst", TINY + [load_instance(bundled_path("lt-1"))], ids=lambda inst: inst.name)
+def test_the_cells_in_line_with_a_passage_come_first(inst):
+    cut = articulation_points(inst.start.tiles, inst.width, inst.height)
+    flags = [_in_line(inst, cut, x, y) for x, y in candidates(inst)]
+    assert flags == sorted(flags, reverse=True)  # every cell in line before every other
+
+
+def test_lt1_rungs_go_along_the_bridge_row():
+    assert candidates(load_instance(bundled_path("lt-1")))[:2 * RUNG] == [(3, 3), (12, 3), (2, 3), (13, 3)]
 
 
 @pytest.mark.slow

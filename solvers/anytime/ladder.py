@@ -11,10 +11,17 @@ proves a bound of its class only, and the ladder stops there: every rung above h
 
 The candidates are the cells where both the start and the goal have a tile (so a schedule
 without scaffold may lift the tile and set it down again: a hole to hand a tile over through, a
-row moved along by one), except those whose lifting disconnects the start structure. They come
-nearest first to a cell that changes (steps over tiles), as a shorter schedule changes the
-structure around the cells it must change; ties by position. The ladder is a search for shorter
-schedules and a record of what each class proves, not a bound on every schedule.
+row moved along by one), except those whose lifting disconnects the start structure, and except
+the cells that change. First come the cells *in line with a passage*: a passage is a straight
+run of two or more cut cells of the start (cells whose lifting disconnects it, as on a bridge);
+the cells that go on from its end in the same direction, over tiles, are in line with it, the
+nearest first, ties by position. Through them the robots on the two sides hand tiles over, and
+move the row that enters the passage along: on lt-1 the first rung ((3, 3), (12, 3)) holds a
+56-step schedule and the second (and (2, 3), (13, 3)) a 54-step one, where the structure kept
+gives 57. The other candidates follow, nearest first to a cell that changes (steps over tiles),
+as a shorter schedule changes the structure around the cells it must change; ties by position.
+The ladder is a search for shorter schedules and a record of what each class proves, not a
+bound on every schedule.
 """
 from __future__ import annotations
 
@@ -50,8 +57,27 @@ def candidates(instance: Instance) -> list[tuple[int, int]]:
                 dist[n] = dist[c] + 1
                 queue.append(n)
     cells = [int(c) for c in np.flatnonzero(both & ~cut & (dist > 0))]
-    cells.sort(key=lambda c: (dist[c], c // w, c % w))
+    line = _in_line(cut, tiles, w, h)
+    cells.sort(key=lambda c: (line.get(c, w + h), dist[c], c // w, c % w))
     return [(c % w, c // w) for c in cells]
+
+
+def _in_line(cut: np.ndarray, tiles: np.ndarray, w: int, h: int) -> dict[int, int]:
+    """The cells in line with a passage (module docstring) and their steps from its end."""
+    line: dict[int, int] = {}
+    for a in np.flatnonzero(cut):
+        x, y = int(a) % w, int(a) // w
+        for dx, dy in ((1, 0), (-1, 0), (0, 1), (0, -1)):
+            bx, by = x - dx, y - dy  # the passage goes on behind a
+            if not (0 <= bx < w and 0 <= by < h and cut[by * w + bx]):
+                continue
+            k, cx, cy = 1, x + dx, y + dy
+            while 0 <= cx < w and 0 <= cy < h and tiles[cy * w + cx]:
+                c = cy * w + cx
+                if not cut[c]:
+                    line[c] = min(line.get(c, k), k)
+                k, cx, cy = k + 1, cx + dx, cy + dy
+    return line
 
 
 def climb(instance: Instance, best, budget: Budget, offer, max_states: int) -> list[dict]:
