@@ -469,3 +469,15 @@ def test_a_run_that_does_not_go_round_in_circles_evicts_no_one():
     result = plan(inst)
     assert result.status == "feasible" and result.stats["evictions"] == 0
     assert validate(inst, result.schedule).valid
+
+
+def test_a_motion_layer_cut_short_says_why():
+    from bille.heuristics.loop.joint_motion import DEADLOCK, cut, timed_out
+    from bille.instances.run import Budget
+
+    spent = Budget(0.0)
+    assert cut(spent).kind == "time-limit" and timed_out(cut(spent))
+    stopped = Budget(60.0)
+    stopped.cancel()
+    assert cut(stopped).kind == "interrupted" and timed_out(cut(stopped))
+    assert not timed_out(DEADLOCK) and not timed_out(None)

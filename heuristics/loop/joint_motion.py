@@ -15,6 +15,7 @@ from __future__ import annotations
 import random
 
 from bille.instances import Instance
+from bille.instances.failure import Failure, stuck
 from bille.instances.run import Budget
 from bille.instances.walking import UNREACHABLE
 
@@ -25,6 +26,19 @@ from .loopstate import LoopState
 
 MSTAR_EXPANSIONS = 100_000  # per M* replan: a joint plan that needs more ends the run
 LACAM_NODES = 2_000  # per LaCAM* plan of a replan (a goal set that needs more is relaxed)
+# blocked, or going round in circles, with the priority shifts spent (a motion layer, the loop)
+DEADLOCK = stuck("deadlock")
+
+
+def cut(budget: Budget) -> Failure:
+    """A motion layer's plan for one step cut short by the run's budget (its time limit, or
+    Ctrl-C: :meth:`Budget.why`)."""
+    return Failure(budget.why().kind, "timeout")
+
+
+def timed_out(failure: Failure | None) -> bool:
+    """Whether a motion layer's failure is :func:`cut`'s."""
+    return failure is not None and failure.kind in ("time-limit", "interrupted")
 
 
 class _JointPlan:
@@ -36,7 +50,7 @@ class _JointPlan:
 
     def start(self, instance: Instance, stats: dict, shifts: int | None = None) -> None:
         self.instance, self.stats = instance, stats
-        self.failure: str | None = None
+        self.failure: Failure | None = None
         self._plan: list | None = None  # the joint actions still to follow
         self._key = None  # the state, goals and manipulations the plan expects next
 
@@ -70,7 +84,8 @@ class _JointPlan:
             status, steps = self._search(s, problem, fixed, budget)
             self.stats["replans"] += 1
             if steps is None:
-                self.stats["joint_status"] = self.failure = status
+                self.stats["joint_status"] = status
+                self.failure = cut(budget) if status == "timeout" else stuck(status)
                 return None
             self._plan = list(steps) or [tuple(walks[i].wait for i in range(len(poses)))]
         joint = list(self._plan.pop(0))

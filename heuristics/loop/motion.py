@@ -17,11 +17,12 @@ from functools import cache
 from typing import Callable, Protocol
 
 from bille.instances import Instance
+from bille.instances.failure import Failure
 from bille.instances.run import Budget
 
 from ..spacetime import reservation_step
 from .goals import Goal
-from .joint_motion import LaCAM, MStar
+from .joint_motion import DEADLOCK, LaCAM, MStar, cut
 from .loopstate import LoopState
 
 
@@ -37,7 +38,7 @@ class Motion(Protocol):
     label: str
     parking: bool
     drops: bool
-    failure: str | None  # why the last :meth:`step` found no joint action (``timeout``, ...)
+    failure: Failure | None  # why the last :meth:`step` found no joint action (:func:`cut`, ...)
 
     def start(self, instance: Instance, stats: dict, shifts: int | None = None) -> None:
         """Begin a run on ``instance``, counting into ``stats``. ``shifts``: path planning, the
@@ -76,7 +77,7 @@ class TemporalAStar:
 
     def __init__(self, horizon: int = 5, epsilon: float = 1.0) -> None:
         self.horizon, self.epsilon = horizon, epsilon
-        self.failure: str | None = None
+        self.failure: Failure | None = None
 
     def start(self, instance: Instance, stats: dict, shifts: int | None = None) -> None:
         self.stats, self.shifts = stats, shifts
@@ -92,7 +93,7 @@ class TemporalAStar:
             if blocked is None:
                 break
             if budget.expired():  # between replans too
-                self.failure = "timeout"
+                self.failure = cut(budget)
                 return None
             joint, blocked = self._replan(s, blocked, fixed, goals, intents)
         if blocked is not None:
@@ -106,10 +107,10 @@ class TemporalAStar:
         """The paper's rule for a blocked robot (class docstring)."""
         while blocked is not None:
             if self.stats["priority_shifts"] >= self.shifts:
-                self.failure = "deadlock"
+                self.failure = DEADLOCK
                 return None
             if budget.expired():  # many robots: many replans
-                self.failure = "timeout"
+                self.failure = cut(budget)
                 return None
             joint, blocked = self._replan(s, blocked, fixed, goals, intents)
         return joint

@@ -58,6 +58,7 @@ from bille.instances.walking import UNREACHABLE
 from ..joint import check_tables, to_result
 from .allocation import Allocation
 from .goals import Goals
+from .joint_motion import DEADLOCK, timed_out
 from .legs import Leg, Transfer
 from .loop_options import LoopOptions
 from .loopstate import LoopState
@@ -68,7 +69,6 @@ from .transfer import LoadTransfer
 
 RESTORED = ("circle_shifts", "relays", "swaps")  # counts that a backtrack sets back
 PROGRESS_STEPS = 16  # the loop tells its progress every so many steps
-DEADLOCK = stuck("deadlock")  # going round in circles with the priority shifts spent
 
 WALKING = ("horizon", "epsilon", "steps", "priority_shifts", "replans", "expanded", "plan_ms_mean",
            "plan_ms_max")  # the counts of path planning (no jobs)
@@ -282,7 +282,7 @@ class Loop:
         fixed, intents = self.manipulation.decide(s)
         goals = self.goals.all(s)
         joint = motion.step(s, fixed, goals, intents, self.budget)
-        if joint is None and motion.drops and motion.failure != "timeout":
+        if joint is None and motion.drops and not timed_out(motion.failure):
             fixed = self._drop()  # no plan gets a carrying robot on: it puts its tile down
             if fixed:
                 joint = s.waits()
@@ -290,11 +290,11 @@ class Loop:
                     joint[i] = a
                 motion.forget()
         if joint is None:
-            status = "timeout" if motion.failure == "timeout" else "unsolved"
+            status = "timeout" if timed_out(motion.failure) else "unsolved"
             if self.path_planning:
                 step_times.append(self.budget.now() - t0)
-                raise Stop(self.budget.why() if status == "timeout" else stuck(motion.failure), status)
-            raise Stop(stuck(f"{motion.label} found no joint plan ({motion.failure})"), status)
+                raise Stop(self.budget.why() if status == "timeout" else motion.failure, status)
+            raise Stop(stuck(f"{motion.label} found no joint plan ({motion.failure.text})"), status)
         step_times.append(self.budget.now() - t0)
         nxt = apply(s.world, s.state, joint, step=len(s.steps) + 1)
         if not isinstance(nxt, State):  # the planners respect the rules; this is a bug
