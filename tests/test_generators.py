@@ -232,3 +232,17 @@ def test_a_shipped_movingai_map_is_named_and_listed(tmp_path):
     shipped = Path(__file__).parent.parent / "tools" / "bench" / "movingai" / "room-32-32-4.map"
     too_many = runner.invoke(cli, ["gen", "movingai", str(shipped), "-k", "5000"])
     assert too_many.exit_code != 0 and "room for at most 341 agents" in str(too_many.exception or too_many.output)
+
+
+def test_a_shipped_map_with_another_scenario_is_read_with_it(tmp_path):
+    from click.testing import CliRunner
+    from bille.tools.bench.maps import scenario_of, shipped_maps
+    from bille.tools.cli import cli
+
+    assert scenario_of(shipped_maps(), "den312d").name == "den312d-dlacam3.scen"
+    assert scenario_of(shipped_maps(), "room-32-32-4").name == "room-32-32-4-random-1.scen"
+    made = CliRunner().invoke(cli, ["gen", "movingai", "den312d", "-k", "5", "-o", str(tmp_path / "d.yaml")])
+    assert made.exit_code == 0 and (tmp_path / "d.yaml").exists()
+    from bille.instances.instance import load_instance
+    inst = load_instance(tmp_path / "d.yaml")
+    assert inst.num_robots == 5 and (inst.width, inst.height) == (65, 81)

@@ -151,7 +151,7 @@ def shipped_map(name: str, scen: str | None) -> tuple[str, str | None]:
     (with its first scenario when ``scen`` is None)."""
     from pathlib import Path
 
-    from .bench.maps import SCENARIO, shipped_maps
+    from .bench.maps import scenario_of, shipped_maps
 
     if Path(name).exists():
         return name, scen
@@ -160,7 +160,7 @@ def shipped_map(name: str, scen: str | None) -> tuple[str, str | None]:
     path = folder / f"{stem}.map"
     if "/" in stem or not path.is_file():
         return name, scen
-    first = folder / f"{stem}{SCENARIO}"
+    first = scenario_of(folder, stem)
     return str(path), scen if scen is not None or not first.is_file() else str(first)
 
 

@@ -275,7 +275,7 @@ def bench_crowd(size: int, robots: int, horizon: int, seed: int) -> int:
 @bench.command("mapf")
 @click.option("--maps", "folder", type=click.Path(file_okay=False, exists=True), default=None,
               help="Folder of MovingAI NAME.map files with their NAME-random-1.scen scenarios "
-                   "(default: the four maps shipped with bille).")
+                   "(default: the maps shipped with bille that have one).")
 @click.option("--names", default=None, help="Comma-separated map names in that folder (default: the shipped "
               "random-32-32-10, room-32-32-4, warehouse-10-20-10-2-1, random-64-64-20, or every map of --maps).")
 @click.option("--agents", default="50,100,200,300,400", show_default=True, help="Comma-separated agent counts.")

@@ -50,9 +50,10 @@ def bench_cbs(instances, binary: str, time_limit: float) -> int:
                    "warehouse-10-20-10-2-1:20,40,60).")
 @click.option("--first-rows", default=None, metavar="MAP:N,N;...",
               help="Rows for lacam3 (default: random-32-32-10:400;room-32-32-4:200;warehouse-10-20-10-2-1:500;"
-                   "random-64-64-20:500).")
+                   "random-64-64-20:500;den312d:200).")
 @click.option("--maps", "folder", type=click.Path(file_okay=False, exists=True), default=None,
-              help="Folder of MovingAI NAME.map and NAME-random-1.scen files (default: the maps shipped with bille).")
+              help="Folder of MovingAI NAME.map files, each with NAME-random-1.scen or one other NAME-*.scen "
+                   "(default: the maps shipped with bille).")
 @click.option("--time-limit", type=click.FloatRange(min=0.1), default=60.0, show_default=True, help="Seconds per run.")
 def bench_peers(cbsh2, eecbs, mrp_cbs, lacam3, optimal_rows, first_rows, folder, time_limit: float) -> int:
     """bille's cbs and lacam beside the C++ peers named (each built from its own repository,
@@ -60,7 +61,7 @@ def bench_peers(cbsh2, eecbs, mrp_cbs, lacam3, optimal_rows, first_rows, folder,
     the geometric mean of the time ratios (bille / peer) per peer."""
     from pathlib import Path
 
-    from .maps import SCENARIO, shipped_maps
+    from .maps import scenario_of, shipped_maps
     from .optimal import executable
     from .sidebyside import FIRST_PEERS, FIRST_ROWS, OPTIMAL_PEERS, OPTIMAL_ROWS, parse_rows, side_by_side, table
 
@@ -80,9 +81,9 @@ def bench_peers(cbsh2, eecbs, mrp_cbs, lacam3, optimal_rows, first_rows, folder,
             rows = default if text is None else parse_rows(text)
         except ValueError as exc:
             raise click.BadParameter(str(exc), param_hint=option) from None
-        missing = [m for m, _ in rows if not ((where / f"{m}.map").is_file() and (where / f"{m}{SCENARIO}").is_file())]
+        missing = [m for m, _ in rows if not ((where / f"{m}.map").is_file() and scenario_of(where, m).is_file())]
         if missing:
-            raise click.BadParameter(f"{', '.join(missing)}: no NAME.map with NAME-random-1.scen in {where}",
+            raise click.BadParameter(f"{', '.join(missing)}: no NAME.map with a NAME-*.scen in {where}",
                                      param_hint=option)
         chosen = {n: p for n, p in peers.items() if n in names}
         if chosen:

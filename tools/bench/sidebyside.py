@@ -35,7 +35,7 @@ from bille.solvers import solve
 
 from ..common import solved
 from ..tables import text_table
-from .maps import SCENARIO
+from .maps import scenario_of
 from .mapf import sum_of_costs
 from .peers import program_output, run_lacam3
 
@@ -43,7 +43,7 @@ from .peers import program_output, run_lacam3
 OPTIMAL_ROWS = (("random-32-32-10", (30, 40, 50, 60)), ("room-32-32-4", (20, 30, 40)),
                 ("warehouse-10-20-10-2-1", (20, 40, 60)))
 FIRST_ROWS = (("random-32-32-10", (400,)), ("room-32-32-4", (200,)), ("warehouse-10-20-10-2-1", (500,)),
-              ("random-64-64-20", (500,)))
+              ("random-64-64-20", (500,)), ("den312d", (200,)))
 OPTIMAL_PEERS = ("cbsh2-rtc", "eecbs", "mrp-cbs")
 FIRST_PEERS = ("lacam3",)
 
@@ -118,7 +118,7 @@ def side_by_side(folder: Path, rows, peers: dict[str, Path], seconds: float, kin
     mine = bille_cbs if kind == "optimal" else bille_lacam
     warmed = False
     for name, counts in rows:
-        map_file, scen = folder / f"{name}.map", folder / f"{name}{SCENARIO}"
+        map_file, scen = folder / f"{name}.map", scenario_of(folder, name)
         for k in counts:
             inst = from_movingai(map_file, scen, agents=k)
             if not warmed:  # the peers' times leave out their start: bille's its imports and compiled code
