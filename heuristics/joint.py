@@ -10,6 +10,7 @@ compared lexicographically ("ties broken by makespan").
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Iterator
 
 import numpy as np
@@ -45,15 +46,37 @@ class JointProblem:
     starts: tuple[int, ...] | None = None  # start poses (default: the instance's)
     homes: list[np.ndarray] | None = None  # per robot: goal poses (default: front foot on the goal)
 
-    def __post_init__(self) -> None:
-        # plain lists for the inner loops (indexing numpy per call costs more than the search):
-        # dist_lists[i][p] = dists[i][p]; home_lists[i][p]: pose p is one of robot i's goal poses
-        self.dist_lists = [d.tolist() for d in self.dists]
+    # plain lists for the inner loops (indexing numpy per call costs more than the search),
+    # made when first read (the compiled generators read the arrays instead)
+    @cached_property
+    def dist_lists(self) -> list[list[int]]:
+        """``dist_lists[i][p] = dists[i][p]``."""
+        return [d.tolist() for d in self.dists]
+
+    @cached_property
+    def home_lists(self) -> list[list[bool]]:
+        """``home_lists[i][p]``: pose ``p`` is one of robot ``i``'s goal poses."""
         if self.homes is not None:
-            self.home_lists = [h.tolist() for h in self.homes]
-        else:
-            self.home_lists = [[True] * w.succ.shape[0] if c < 0 else _flags(w.succ.shape[0], w.graph.feet[:, 0] == c)
-                               for w, c in zip(self.walks, self.goals)]
+            return [h.tolist() for h in self.homes]
+        return [[True] * w.succ.shape[0] if c < 0 else _flags(w.succ.shape[0], w.graph.feet[:, 0] == c)
+                for w, c in zip(self.walks, self.goals)]
+
+    @cached_property
+    def dist_table(self) -> np.ndarray:
+        """``dists`` stacked as one ``int64`` array ``[robot, pose]`` (robots on one pose graph)."""
+        if not self.dists:
+            return np.zeros((0, self.walks[0].succ.shape[0] if self.walks else 0), np.int64)
+        return np.stack([np.asarray(d, dtype=np.int64) for d in self.dists])
+
+    @cached_property
+    def home_table(self) -> np.ndarray:
+        """``home_table[i, p]``: pose ``p`` is one of robot ``i``'s goal poses (robots on one pose
+        graph), as ``home_lists``."""
+        if self.homes is not None:
+            return np.stack([np.asarray(h, dtype=np.bool_) for h in self.homes])
+        walk = self.walks[0]
+        goals = np.array(self.goals, dtype=np.int64)[:, None]
+        return np.where(goals < 0, True, walk.graph.feet[:, 0][None, :] == goals)
 
     @classmethod
     def of(cls, instance: Instance, method: str = "astar") -> "JointProblem":

@@ -37,13 +37,8 @@ class CompiledClassic(Classic):
         for v, row in enumerate(self.nbrs):
             self.nbr[v, :len(row)] = row
         self.nbr_n = np.array([len(row) for row in self.nbrs], dtype=np.int64)
-        self.dist = np.stack([np.asarray(d, dtype=np.int64) for d in problem.dists]) if problem.dists else \
-            np.zeros((0, succ.shape[0]), np.int64)
-        if problem.homes is not None:
-            self.home = np.stack([np.asarray(h, dtype=np.bool_) for h in problem.homes])
-        else:
-            goals = np.array(problem.goals, dtype=np.int64)[:, None]
-            self.home = np.where(goals < 0, True, walk.graph.feet[:, 0][None, :] == goals)
+        self.dist = problem.dist_table
+        self.home = problem.home_table
         self._prefer_of = None
         self.prefer_at = np.full((0, 0), -1, dtype=np.int64)
         P = succ.shape[0]

@@ -133,7 +133,7 @@ def scatter(nbrs: list[list[int]], dists: list, starts: list[int], goals: list[i
         compiled = m * len(nbrs) >= COMPILED_FROM or _loaded()
     if compiled:
         from .scatter_compiled import CompiledTable
-        table = CompiledTable(nbrs)
+        table = CompiledTable(nbrs, m)
         dists = dists if arrays is None else arrays
     else:
         table = CollisionTable(nbrs)

@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import random
 
+import numpy as np
+
 from bille.instances.jit import loaded
 from bille.instances.run import Budget
 
@@ -31,12 +33,16 @@ class PoseSpace:
         # the SUO paths and their refinement walk on one set of neighbours, so only where every
         # robot walks alike (one moveset, one load): another robot's moves may not be among them
         self.alike = len({id(w) for w in problem.walks}) <= 1
-        self.generator = (Classic if self.classic else Bille)(problem, rng)
         large = self.m > 0 and self.m * problem.walks[0].succ.shape[0] >= COMPILED_FROM
-        if self.classic and self.alike and self.m > 0 and (large or loaded()):  # Numba loads in 0.3 s
-            from .pibt_compiled import CompiledClassic  # the same configurations, compiled
+        # the same configurations compiled, where Numba is worth loading (0.3 s) or loaded
+        self.compiled = self.classic and self.alike and self.m > 0 and (large or loaded())
+        if self.compiled:
+            from .pibt_compiled import CompiledClassic
 
             self.generator = CompiledClassic(problem, rng)
+            self._rows = np.arange(self.m)
+        else:
+            self.generator = (Classic if self.classic else Bille)(problem, rng)
 
     def spread(self, budget: Budget, seed: int) -> None:
         """Classic collisions: the generator prefers each robot's next cell on its SUO path
@@ -44,9 +50,13 @@ class PoseSpace:
         refine its schedules (:meth:`refine`)."""
         problem = self.problem
         self.goal_poses = [int(w.goal_poses(c)[0]) for w, c in zip(problem.walks, problem.goals)]
-        self.generator.prefer = scatter(self.generator.nbrs, problem.dist_lists, list(problem.start),
-                                        self.goal_poses, margin=SCATTER_MARGIN, budget=budget, seed=seed,
-                                        arrays=problem.dists)
+        if self.compiled:  # Numba loaded, the distances stacked: the compiled table reads their rows
+            dists, arrays, compiled = problem.dist_table, None, True
+        else:
+            dists, arrays, compiled = problem.dist_lists, problem.dists, None
+        self.generator.prefer = scatter(self.generator.nbrs, dists, list(problem.start), self.goal_poses,
+                                        margin=SCATTER_MARGIN, budget=budget, seed=seed, arrays=arrays,
+                                        compiled=compiled)
         self.refining = None
 
     def refine(self, configs: list[Poses] | None, rng: random.Random, budget: Budget) -> list[Poses] | None:
@@ -85,23 +95,35 @@ class PoseSpace:
     def generate(self, config: Poses, order: list[int], forced: tuple, first: bool):
         return self.generator.generate(config, order, forced, self.pinned if first else {})
 
+    # with the compiled generator, the same values read from the stacked tables (no lists made)
     def is_goal(self, config: Poses) -> bool:
+        if self.compiled:
+            return bool(self.problem.home_table[self._rows, config].all())
         return self.problem.is_goal(config)
 
     def resting_all(self, config: Poses) -> list[bool]:
+        if self.compiled:
+            return self.problem.home_table[self._rows, config].tolist()
         return [home[p] for home, p in zip(self.problem.home_lists, config)]
 
     def first_priorities(self, config: Poses) -> list[float]:
+        if self.compiled:
+            return (self.problem.dist_table[self._rows, config] / 10_000).tolist()
         return [d[p] / 10_000 for d, p in zip(self.problem.dist_lists, config)]
 
     def h(self, config: Poses) -> int:
+        if self.compiled:
+            ds = self.problem.dist_table[self._rows, config]
+            return int(ds.max()) if self.makespan else int(ds.sum())
         ds = [d[p] for d, p in zip(self.problem.dist_lists, config)]
         return max(ds, default=0) if self.makespan else sum(ds)
 
     def cost(self, a: Poses, b: Poses) -> int:
         if self.makespan:
             return 1
+        if self.compiled:
+            a, b = np.asarray(a), np.asarray(b)
+            return int(((a != b) | ~self.problem.home_table[self._rows, b]).sum())
         return sum(1 for home, p, q in zip(self.problem.home_lists, a, b) if not (p == q and home[q]))
-
 
 __all__ = ["PoseSpace", "SCATTER_MARGIN"]
