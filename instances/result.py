@@ -5,6 +5,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from .claim import EVERY, Claim
+from .counters import Counters
 from .failure import Failure
 from .metrics import Metrics
 from .schedule import Schedule
@@ -44,6 +45,11 @@ class Result:
     def __post_init__(self) -> None:
         if self.status not in STATUSES:
             raise ValueError(f"unknown status {self.status!r} (expected one of {STATUSES})")
+
+    @property
+    def counters(self) -> Counters:
+        """The counts in ``stats`` that tools read, typed (:class:`~bille.instances.counters.Counters`)."""
+        return Counters.of(self.stats)
 
     def to_json(self) -> dict:
         return {

@@ -66,3 +66,26 @@ def test_a_failure_says_its_kind_for_code_and_its_text_for_people():
     assert late.status == "timeout" and late.failure.kind == "time-limit"
     keep = solve(inst, "bfs", engine="compiled", cells="keep", max_steps=3)
     assert keep.failure.kind == "cap" and keep.claim.lower == 4
+
+
+def test_the_counts_tools_read_are_typed():
+    import re
+    from pathlib import Path
+
+    from bille.instances.counters import KEYS, Counters
+    from bille.instances.result import Result
+
+    with pytest.raises(TypeError, match="nodes"):
+        Result("x", "feasible", stats={"nodes": "3"}).counters
+    with pytest.raises(TypeError, match="steps"):
+        Counters.of({"steps": True})
+    counts = solve("compare-4", "lacam").counters  # LaCAM* counts its nodes
+    assert isinstance(counts.nodes, int) and counts.nodes > 0 and counts.relays is None
+    loop = solve("lt-4", "temporal-astar", load_transfer=True).counters
+    assert loop.steps > 0 and loop.jobs > 0 and loop.plan_ms_max >= loop.plan_ms_mean >= 0
+    # the tools read them through Counters, never by their keys
+    read = re.compile(r"stats(\.get\(|\[)\s*[\"'](" + "|".join(KEYS) + r")[\"']")
+    tools = Path(__file__).parent.parent / "tools"
+    offenders = [f"{p.name}:{n}" for p in tools.rglob("*.py") for n, line in enumerate(p.read_text().splitlines(), 1)
+                 if read.search(line)]
+    assert not offenders, offenders

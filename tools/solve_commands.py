@@ -123,8 +123,9 @@ def _result_lines(inst, method: str, result) -> list[str]:
         lines.append(f"failure: {_explain(result.failure)}")
     lines += [f"{key}: {stats[key]}" for key in ("stopped", "reason", "violation") if key in stats]
     if stats.get("load_transfer"):
-        lines.append(f"load transfers: {stats['relays']} relays, {stats['swaps']} swaps "
-                     f"({stats['pairs_considered']} robot pairs within d_tr considered)")
+        counts = result.counters
+        lines.append(f"load transfers: {counts.relays} relays, {counts.swaps} swaps "
+                     f"({counts.pairs_considered} robot pairs within d_tr considered)")
     return lines
 
 

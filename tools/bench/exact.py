@@ -68,7 +68,7 @@ def connectivity_table(time_limit: float, threads: int, echo) -> None:
             _, eager, _ = _run(name, method, time_limit, connectivity="eager", **opts)
             _, lazy, _ = _run(name, method, time_limit, connectivity="lazy", **opts)
             ratio = f"{lazy.time_s / eager.time_s:.2f}" if eager.status == lazy.status == "optimal" else "-"
-            echo(f"   {name:<12} {method:<6} {_time(eager):>9} {_time(lazy):>9} {lazy.stats.get('cuts', 0):>6} {ratio:>10}")
+            echo(f"   {name:<12} {method:<6} {_time(eager):>9} {_time(lazy):>9} {lazy.counters.cuts or 0:>6} {ratio:>10}")
 
 
 def pruning_table(time_limit: float, threads: int, echo) -> None:

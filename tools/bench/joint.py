@@ -37,7 +37,7 @@ def _row(name: str, cells: str, add: list | None, time_limit: float) -> dict:
     value = got.metrics.makespan if decided else got.stats.get("class", {}).get("lower_bound")
     return {"map": inst.name, "class": got.stats["class"]["cells"] + ("+" + str(len(add)) if add else ""),
             "answer": f"optimal {value}" if decided else f">= {value} ({got.failure})",
-            "states": got.stats.get("states"), "s": round(seconds, 2)}
+            "states": got.counters.states, "s": round(seconds, 2)}
 
 
 def _speed(name: str) -> tuple[float, float]:

@@ -77,7 +77,7 @@ def mapf_rows(folder: Path, maps=MAPS, agents=AGENTS, time_limit: float = 60.0, 
             # sum of loss: lacam3's objective, whose improvements lower the sum of costs
             result = solved(solve(inst, "lacam", objective="sum-of-loss", time_limit=time_limit, improve=improve))
             row = dict(map=name, agents=k, status=result.status, time_s=result.time_s,
-                       first_s=result.stats.get("first_s"), scatter_s=result.stats.get("scatter_s"),
+                       first_s=result.counters.first_s, scatter_s=result.counters.scatter_s,
                        lower=lower_soc(inst), peers={})
             if result.schedule is not None:
                 row.update(soc=sum_of_costs(inst, result.schedule), makespan=result.metrics.makespan)
@@ -122,5 +122,5 @@ def scale_rows(size: int, robot_counts, seed: int = 0):
     for robots in robot_counts:
         inst = full_square(size, robots, seed)
         result = solved(solve(inst, "lacam", improve=0.0, time_limit=120))
-        yield dict(robots=robots, status=result.status, first_s=result.stats.get("first_s"), time_s=result.time_s,
-                   makespan=result.metrics.makespan if result.metrics else None, nodes=result.stats.get("nodes"))
+        yield dict(robots=robots, status=result.status, first_s=result.counters.first_s, time_s=result.time_s,
+                   makespan=result.metrics.makespan if result.metrics else None, nodes=result.counters.nodes)

@@ -49,7 +49,7 @@ def optimal_rows(folder: Path, maps, agents, time_limit: float):
             for label, method, options in RUNS:
                 result = solved(solve(inst, method, time_limit=time_limit, **options))
                 row["runs"][label] = dict(status=result.status, time_s=result.time_s,
-                                          soc=result.stats.get("sum_of_costs") if result.status == "optimal" else None)
+                                          soc=result.counters.sum_of_costs if result.status == "optimal" else None)
             yield row
 
 
@@ -99,8 +99,8 @@ def peer_rows(binary: Path, files: list[Path], time_limit: float):
             yield row
             continue
         result = solved(solve(inst, "cbs", time_limit=time_limit))
-        row["bille"] = dict(status=result.status, time_s=result.time_s, nodes=result.stats.get("expanded"),
-                            soc=result.stats.get("sum_of_costs") if result.status == "optimal" else None,
+        row["bille"] = dict(status=result.status, time_s=result.time_s, nodes=result.counters.expanded,
+                            soc=result.counters.sum_of_costs if result.status == "optimal" else None,
                             valid=result.schedule is not None and validate(inst, result.schedule).valid)
         row["peer"] = run_peer(binary, path, time_limit)
         yield row

@@ -21,6 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
+from bille.instances.counters import Counters
+
 from ..tables import text_table
 
 MAPS = [f"compare-{m}" for m in range(2, 7)]
@@ -59,7 +61,7 @@ def _planner_row(row: dict) -> dict:
                 epsilon=None if eps is None else (int(eps) if float(eps).is_integer() else eps),
                 horizon=options.get("horizon"), improve=options.get("improve"), status=row["status"],
                 solved=row["makespan"] is not None, makespan=row["makespan"], tiles_traveled=row["tiles_traveled"],
-                sum_of_costs=stats.get("sum_of_costs"), time_s=row["time_s"])
+                sum_of_costs=Counters.of(stats).sum_of_costs, time_s=row["time_s"])
 
 
 def label(row: dict) -> str:
@@ -206,12 +208,13 @@ def bench_crowd(size: int = 64, robots: int = 50, horizon: int = 5, seed: int = 
         spacetime.window(problem.walks[i], problem.dist_lists[i], problem.home_lists[i], p, horizon,
                          [set() for _ in range(horizon + 1)], set())
     alone_ms = 1000 * (time.perf_counter() - t0)
-    mean = result.stats["plan_ms_mean"]
+    counts = result.counters
+    mean = counts.plan_ms_mean
     return [
         f"Temporal A* with {robots} robots on a {size}x{size} structure (S7, H={horizon}, seed {seed}):",
-        f"  status {result.status}{'' if ok else ' (no valid schedule)'}, {result.stats['steps']} steps, "
-        f"{result.stats['priority_shifts']} priority shifts, total {result.time_s:.2f} s",
-        f"  replanning per step: mean {mean:.1f} ms, max {result.stats['plan_ms_max']:.1f} ms   [target mean < 100 ms]",
+        f"  status {result.status}{'' if ok else ' (no valid schedule)'}, {counts.steps} steps, "
+        f"{counts.priority_shifts} priority shifts, total {result.time_s:.2f} s",
+        f"  replanning per step: mean {mean:.1f} ms, max {counts.plan_ms_max:.1f} ms   [target mean < 100 ms]",
         f"  baseline, every robot's window alone without reservations: {alone_ms:.1f} ms "
         f"-> coordination costs {mean / alone_ms:.2f}x",
     ]

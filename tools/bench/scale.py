@@ -72,12 +72,12 @@ def scale_rows(size: int = 64, robot_counts=ROBOTS, obstacles=OBSTACLES, seed: i
             inst = scale_instance(size, robots, share, seed)
             result = solve(inst, "lacam", improve=0.0, time_limit=time_limit)
             row = dict(obstacles=share, robots=robots, status=result.status, time_s=result.time_s,
-                       nodes=result.stats.get("nodes"), bound=lower_bound(inst).lower)
+                       nodes=result.counters.nodes, bound=lower_bound(inst).lower)
             if result.schedule is not None:
                 report = validate(inst, result.schedule)
                 row.update(makespan=report.metrics.makespan, valid=report.valid)
             ta = solve(inst, "temporal-astar", max_steps=temporal_steps, time_limit=time_limit)
-            row["temporal_ms"] = ta.stats.get("plan_ms_mean")
+            row["temporal_ms"] = ta.counters.plan_ms_mean
             yield row
 
 

@@ -99,13 +99,13 @@ def bille_cbs(instance, seconds: float) -> dict:
     result = solved(solve(instance, "cbs", time_limit=seconds))  # solve() validates the schedule it returns
     row = {"status": result.status, "time_s": result.time_s}
     if result.status == "optimal":
-        row["soc"] = result.stats["sum_of_costs"]
+        row["soc"] = result.counters.sum_of_costs
     return row
 
 
 def bille_lacam(instance, seconds: float) -> dict:
     result = solved(solve(instance, "lacam", time_limit=seconds, improve=0.0))
-    row = {"status": result.status, "time_s": result.time_s, "scatter_s": result.stats.get("scatter_s")}
+    row = {"status": result.status, "time_s": result.time_s, "scatter_s": result.counters.scatter_s}
     if result.metrics is not None:  # a valid schedule (solve() validates it)
         row["soc"] = sum_of_costs(instance, result.schedule)
     return row

@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from bille.instances import BilleError, Instance
+from bille.instances.counters import Counters
 from bille.solvers import solve
 
 from ..common import solved
@@ -74,10 +75,10 @@ def run_maps(instances: list[Instance], horizon: int, d_tr: int, time_limit: flo
     rows = []
     for run in spec.runs[::2]:
         off, on = by[run.instance_hash, False], by[run.instance_hash, True]
-        stats = json.loads(on["stats"] or "{}")
+        counts = Counters.of(json.loads(on["stats"] or "{}"))
         inst = instances[len(rows)]
-        row = {"map": inst.name, "robots": on["robots"], "tasks": stats.get("jobs"),
-               "relays": stats.get("relays", 0), "swaps": stats.get("swaps", 0)}
+        row = {"map": inst.name, "robots": on["robots"], "tasks": counts.jobs,
+               "relays": counts.relays or 0, "swaps": counts.swaps or 0}
         for tag, res in (("off", off), ("on", on)):
             failure = json.loads(res["stats"] or "{}").get("failure")
             row[f"status_{tag}"] = res["status"] if res["schedule"] else (failure or res["error"] or res["status"])
