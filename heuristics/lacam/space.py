@@ -126,4 +126,5 @@ class PoseSpace:
             return int(((a != b) | ~self.problem.home_table[self._rows, b]).sum())
         return sum(1 for home, p, q in zip(self.problem.home_lists, a, b) if not (p == q and home[q]))
 
+
 __all__ = ["PoseSpace", "SCATTER_MARGIN"]
