@@ -15,13 +15,12 @@ row moved along by one), except those whose lifting disconnects the start struct
 the cells that change. First come the cells *in line with a passage*: a passage is a straight
 run of two or more cut cells of the start (cells whose lifting disconnects it, as on a bridge);
 the cells that go on from its end in the same direction, over tiles, are in line with it, the
-nearest first, ties by position. Through them the robots on the two sides hand tiles over, and
-move the row that enters the passage along: on lt-1 the first rung ((3, 3), (12, 3)) holds a
-56-step schedule and the second (and (2, 3), (13, 3)) a 54-step one, where the structure kept
-gives 57. The other candidates follow, nearest first to a cell that changes (steps over tiles),
-as a shorter schedule changes the structure around the cells it must change; ties by position.
-The ladder is a search for shorter schedules and a record of what each class proves, not a
-bound on every schedule.
+nearest first, ties by position. Through them the robots on the two sides hand tiles over: on
+lt-1 the first rung ((3, 3), (12, 3)) holds a 56-step schedule and the second (and (2, 3),
+(13, 3)) a 54-step one, where the structure kept gives 57. The other candidates follow,
+nearest first to a cell that changes (steps over tiles), as a shorter schedule changes the
+structure around the cells it must change; ties by position. The ladder is a search for shorter
+schedules and a record of what each class proves, not a bound on every schedule.
 """
 from __future__ import annotations
 
