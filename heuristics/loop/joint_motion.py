@@ -19,8 +19,6 @@ from bille.instances.failure import Failure, stuck
 from bille.instances.run import Budget
 from bille.instances.walking import UNREACHABLE
 
-from .. import lacam, mstar
-from ..lacam import pibt
 from ..joint import JointProblem
 from .loopstate import LoopState
 
@@ -116,6 +114,8 @@ class MStar(_JointPlan):
                 for i, g in enumerate(goals)]
 
     def _search(self, s, problem, fixed, budget):
+        from .. import mstar  # the planner, loaded when the loop runs with M*
+
         status, steps, stats = mstar.joint_plan(problem, epsilon=self.epsilon, budget=budget,
                                                 max_expansions=self.max_expansions)
         self.stats["expanded"] += stats["expanded"]
@@ -163,6 +163,8 @@ class LaCAM(_JointPlan):
         plan): robots in the order of their LaCAM priorities (a robot away from its goal gains
         one every step), a manipulating robot pinned to its manipulation's cells, a robot with
         an intent waiting while the robots on its manipulation's cells are pushed off."""
+        from ..lacam import pibt  # the generator, loaded when the loop runs with LaCAM*
+
         poses = s.poses
         walks = [s.walk(i) for i in range(len(poses))]
         lists = []
@@ -190,6 +192,8 @@ class LaCAM(_JointPlan):
         pose stands where another must end), a plan for one robot alone while the others only
         make way (within 15 times as many), the robots taken in turn from ``Q`` (one further at
         every replan). ``goals_dropped`` counts the goals set aside for such plans."""
+        from .. import lacam
+
         pinned = {i: s.walk(i).cells(problem.start[i], a) for i, a in fixed.items()}
         dists = [None if c < 0 else d for c, d in zip(problem.goals, problem.dists)]
         status, steps, stats = lacam.joint_plan(problem, budget=budget, max_nodes=self.max_nodes,

@@ -90,8 +90,9 @@ def bench_imports(argv, as_json: bool) -> int:
 @bench.command("startup")
 @click.option("--runs", type=click.IntRange(min=1), default=5, show_default=True, help="Runs of each command.")
 def bench_startup(runs: int) -> int:
-    """Start-up of the commands that do not solve: median seconds of each in a fresh
-    interpreter, and the ratio to importing numpy, click, yaml and rich in the same rounds."""
+    """Start-up of the commands that do not solve, and of two tiny solves: median seconds of
+    each in a fresh interpreter, and the ratio to importing numpy, click, yaml and rich in the
+    same rounds."""
     from .startup import report
 
     for line in report(runs):

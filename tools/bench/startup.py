@@ -1,4 +1,5 @@
-"""Start-up time of the light commands, against importing the libraries every command needs.
+"""Start-up time of the light commands and of two tiny solves, against importing the libraries
+every command needs.
 
 Each command runs in a fresh interpreter ``runs`` times, interleaved with the baseline
 (``python -c "import numpy, click, yaml, rich"``) so that a change of load on the machine touches
@@ -13,7 +14,7 @@ import time
 
 BASELINE = "import numpy, click, yaml, rich"
 COMMANDS = (["--help"], ["list"], ["show", "point-4"], ["check", "point-4", "point-4.schedule"],
-            ["solve", "--help"])
+            ["solve", "--help"], ["solve", "crowded-2", "-m", "cbs"], ["solve", "compare-4", "-m", "temporal-astar"])
 _MAIN = "import sys; from bille.tools.cli import main; sys.argv[0] = 'bille'; main()"
 
 
@@ -40,5 +41,8 @@ def report(runs: int = 5) -> list[str]:
     rows = measure(runs=runs)
     lines = [f"median of {runs} runs each, interleaved; baseline `python -c \"{BASELINE}\"` "
              f"{rows[0]['baseline_s']:.3f} s"]
-    lines += [f"  {r['command']:<40} {r['s']:.3f} s  {r['ratio']:.1f}x" for r in rows]
+    lines += [f"  {r['command']:<44} {r['s']:.3f} s  {r['ratio']:.1f}x" for r in rows]
+    if sys.dont_write_bytecode:  # PYTHONDONTWRITEBYTECODE: bille's modules compiled at every start
+        lines.append("Python writes no bytecode here (PYTHONDONTWRITEBYTECODE), so every start compiles "
+                     "bille's modules that have none cached yet")
     return lines
