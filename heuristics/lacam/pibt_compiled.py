@@ -76,21 +76,21 @@ class CompiledClassic(Classic):
         at = np.array(config, dtype=np.int64)
         state = self.rng.getstate()  # the search's Mersenne Twister: drawn from in place, then set back
         mt = np.array(state[1][:624], dtype=np.int64)
-        used = np.array([state[1][624]], dtype=np.int64)
+        mti = np.array([state[1][624]], dtype=np.int64)  # its index: the next word to use
         forced_i = np.array([i for i, _ in forced], dtype=np.int64)
         forced_k = np.array([k for _, k in forced], dtype=np.int64)
         choice = np.full(m, -1, dtype=np.int64)
         ok = _generate(at, np.array(order, dtype=np.int64), forced_i, forced_k, self.move_q, self.move_n,
-                       self.dist, self.home, self.nbr, self.nbr_n, self._prefer_arrays(), mt, used,
+                       self.dist, self.home, self.nbr, self.nbr_n, self._prefer_arrays(), mt, mti,
                        self.here, self.next_at, choice)
-        self.rng.setstate((state[0], tuple(mt.tolist()) + (int(used[0]),), state[2]))
+        self.rng.setstate((state[0], tuple(mt.tolist()) + (int(mti[0]),), state[2]))
         if not ok:
             return None
         return tuple(self.move_a[at, choice].tolist()), tuple(self.move_q[at, choice].tolist())
 
 
 @jit
-def _generate(config, order, forced_i, forced_k, move_q, move_n, dist, home, nbr, nbr_n, prefer, mt, used,
+def _generate(config, order, forced_i, forced_k, move_q, move_n, dist, home, nbr, nbr_n, prefer, mt, mti,
               here, next_at, choice):  # pragma: no cover - compiled
     """:meth:`.pibt.Classic.generate` on arrays; ``here`` and ``next_at`` come in as -1 and are
     left so. ``choice`` gets each robot's move number; False if the constraint cannot be met."""
@@ -112,7 +112,7 @@ def _generate(config, order, forced_i, forced_k, move_q, move_n, dist, home, nbr
         for n in range(order.shape[0]):
             i = order[n]
             if choice[i] < 0:
-                _decide(i, config, move_q, move_n, dist, home, nbr, nbr_n, prefer, mt, used, here, next_at, choice,
+                _decide(i, config, move_q, move_n, dist, home, nbr, nbr_n, prefer, mt, mti, here, next_at, choice,
                         frames, ranks)
     for i in range(m):  # every cell next_at was given is a move's cell of some robot: all back to -1
         for k in range(move_n[config[i]]):
@@ -142,14 +142,14 @@ def _swaps(i, q, config, here, choice, move_q):  # pragma: no cover - compiled
 
 
 @jit
-def _decide(root, config, move_q, move_n, dist, home, nbr, nbr_n, prefer, mt, used, here, next_at, choice,
+def _decide(root, config, move_q, move_n, dist, home, nbr, nbr_n, prefer, mt, mti, here, next_at, choice,
             frames, ranks):  # pragma: no cover - compiled
     """:meth:`.pibt.Classic._decide` for robot ``root``, its recursion on an explicit stack
     (Numba's machine code for a recursive function cannot be cached): a frame is ``frames[f] =
     (robot, pusher, moves, rank under way, puller, cell claimed, robot pushed)`` and ``ranks[f]``
     its moves in the order tried."""
     depth = 1
-    _enter(0, root, -1, config, move_q, move_n, dist, home, nbr, nbr_n, prefer, mt, used, here, choice, frames,
+    _enter(0, root, -1, config, move_q, move_n, dist, home, nbr, nbr_n, prefer, mt, mti, here, choice, frames,
            ranks)
     result, back = False, False
     while depth > 0:
@@ -180,7 +180,7 @@ def _decide(root, config, move_q, move_n, dist, home, nbr, nbr_n, prefer, mt, us
             next_at[q] = i
             if j >= 0 and j != i and choice[j] < 0:
                 frames[f, 5], frames[f, 6] = q, j
-                _enter(depth, j, i, config, move_q, move_n, dist, home, nbr, nbr_n, prefer, mt, used, here, choice,
+                _enter(depth, j, i, config, move_q, move_n, dist, home, nbr, nbr_n, prefer, mt, mti, here, choice,
                        frames, ranks)
                 depth += 1
                 descended = True
@@ -204,16 +204,16 @@ def _decide(root, config, move_q, move_n, dist, home, nbr, nbr_n, prefer, mt, us
 
 
 @jit
-def _word(mt, at):  # pragma: no cover - compiled
+def _word(mt, mti):  # pragma: no cover - compiled
     """The next 32-bit output of the Mersenne Twister whose 624 words are ``mt`` and whose index
-    is ``at[0]`` (CPython's ``genrand_uint32``: the words regenerated when all are used)."""
-    if at[0] >= 624:
+    is ``mti[0]`` (CPython's ``genrand_uint32``: the words regenerated when all are used)."""
+    if mti[0] >= 624:
         for k in range(624):
             y = (mt[k] & 0x80000000) | (mt[(k + 1) % 624] & 0x7FFFFFFF)
             mt[k] = mt[(k + 397) % 624] ^ (y >> 1) ^ (0x9908B0DF if y & 1 else 0)
-        at[0] = 0
-    y = mt[at[0]]
-    at[0] += 1
+        mti[0] = 0
+    y = mt[mti[0]]
+    mti[0] += 1
     y ^= y >> 11
     y ^= (y << 7) & 0x9D2C5680
     y ^= (y << 15) & 0xEFC60000
@@ -221,15 +221,15 @@ def _word(mt, at):  # pragma: no cover - compiled
 
 
 @jit
-def _random(mt, at):  # pragma: no cover - compiled
+def _random(mt, mti):  # pragma: no cover - compiled
     """Python's ``random()`` from that state: 53 bits from two outputs (``genrand_res53``)."""
-    a = _word(mt, at) >> 5
-    b = _word(mt, at) >> 6
+    a = _word(mt, mti) >> 5
+    b = _word(mt, mti) >> 6
     return (a * 67108864.0 + b) * (1.0 / 9007199254740992.0)
 
 
 @jit
-def _enter(f, i, pusher, config, move_q, move_n, dist, home, nbr, nbr_n, prefer, mt, used, here, choice, frames,
+def _enter(f, i, pusher, config, move_q, move_n, dist, home, nbr, nbr_n, prefer, mt, mti, here, choice, frames,
            ranks):  # pragma: no cover - compiled
     """Frame ``f`` for robot ``i`` pushed by ``pusher`` (-1: none): its moves ranked as
     :meth:`.pibt.Classic._decide` ranks them (one random draw per move), and its swap partner."""
@@ -244,7 +244,7 @@ def _enter(f, i, pusher, config, move_q, move_n, dist, home, nbr, nbr_n, prefer,
         else:
             busy = 2 if (here[q] >= 0 and here[q] != i) else 0
             base = float(4 * dist[i, q] + busy)
-        keys[k] = base + _random(mt, used)
+        keys[k] = base + _random(mt, mti)
         ranks[f, k] = k
     for a in range(1, n):  # insertion sort by (key, k), as Python's sort of the pairs
         key, kk = keys[a], ranks[f, a]

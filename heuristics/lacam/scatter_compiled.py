@@ -19,6 +19,7 @@ from __future__ import annotations
 import heapq
 
 import numpy as np
+
 from bille.instances.jit import jit
 
 NEVER = 1 << 30  # no path ends on the cell
