@@ -47,6 +47,9 @@ def test_a_tiny_solve_without_a_bound_imports_no_solver_library():
         heavy = sorted(m for m in modules if any(m == h or m.startswith(h + ".") for h in (*HEAVY, "numba")))
         assert not heavy, f"bille {' '.join(argv)} imported {heavy}"
         assert "bille.instances.interop" not in modules  # a bille file needs no reader of other formats
+    loop = loaded[1]  # temporal-astar: the loop loads the other motion layers only to run with them
+    assert "bille.heuristics.loop.reconfigure" in loop
+    assert "bille.heuristics.lacam" not in loop and "bille.heuristics.mstar" not in loop
 
 
 def test_a_method_is_imported_when_it_is_first_used():
