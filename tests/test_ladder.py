@@ -82,7 +82,22 @@ def test_anytime_climbs_the_ladder_and_keeps_what_it_finds():
     result = solve(inst, "anytime", time_limit=30, parallel=False)
     rows = result.stats["ladder"]
     assert rows and all("optimum" in r or "lower_bound" in r for r in rows)
+    assert all(r["decided"] == (r["status"] in ("optimal", "feasible")) for r in rows[:-1])  # climbed past
     best = min(r.get("optimum", 1 << 30) for r in rows)
     assert result.metrics.makespan <= best <= 6
     off = solve(inst, "anytime", time_limit=30, parallel=False, ladder=False)
     assert "ladder" not in off.stats
+
+
+def test_bille_solve_prints_each_rung():
+    from bille.tools.solve_commands import _ladder_lines
+
+    rows = [{"add_cells": [[3, 3], [12, 3]], "status": "optimal", "decided": True, "optimum": 56, "s": 12.3},
+            {"add_cells": [[3, 3], [12, 3], [2, 3], [13, 3]], "status": "feasible", "decided": True,
+             "lower_bound": 56, "s": 40.0},
+            {"add_cells": [[3, 3], [12, 3], [2, 3], [13, 3], [14, 3], [2, 1]], "status": "timeout", "decided": False,
+             "lower_bound": 48, "s": 93.2}]
+    lines = _ladder_lines(rows)
+    assert lines[1] == "  +(3,3)(12,3): optimal 56, 12.3 s"
+    assert lines[2].endswith(">= 56 (nothing shorter than the best schedule then), 40.0 s")
+    assert lines[3] == "  +(3,3)(12,3)(2,3)(13,3)(14,3)(2,1): >= 48 (stopped), 93.2 s"

@@ -99,6 +99,21 @@ def _option_help(method: str, as_json: bool) -> int:
     return EXIT_OK
 
 
+def _ladder_lines(rows: list[dict]) -> list[str]:
+    """anytime's widening ladder (docs/anytime.md): each rung's class and what it proved."""
+    lines = ["widening ladder (the class that keeps the structure, and may change the cells listed):"]
+    for row in rows:
+        cells = "".join(f"({x},{y})" for x, y in row["add_cells"])
+        if "optimum" in row:
+            said = f"optimal {row['optimum']}"
+        elif row.get("decided", True):
+            said = f">= {row['lower_bound']} (nothing shorter than the best schedule then)"
+        else:
+            said = f">= {row['lower_bound']} (stopped)"
+        lines.append(f"  +{cells}: {said}, {row['s']:.1f} s")
+    return lines
+
+
 def _result_lines(inst, method: str, result) -> list[str]:
     """The text ``bille solve`` prints of a result: the summary, then what the claim means (the
     objective, the class bounds), why it stopped, and the load transfers."""
@@ -116,6 +131,8 @@ def _result_lines(inst, method: str, result) -> list[str]:
 
         makespan = result.metrics.makespan if result.metrics else None
         lines += report(makespan, result.lower_bound, stats["class_bounds"], stats.get("classes"))
+    if stats.get("ladder"):
+        lines += _ladder_lines(stats["ladder"])
     if "unreachable" in stats:
         lines.append("unreachable: " + "; ".join(f"robot {i} cannot reach its goal {inst.robot_goals[i]} even alone"
                                                  for i in stats["unreachable"]))

@@ -98,7 +98,7 @@ def climb(instance: Instance, best, budget: Budget, offer, max_states: int) -> l
         got = bfs(instance, Options(cells="keep", add_cells=added, incumbent=schedule, max_states=max_states),
                   Run(budget.child()))
         decided = "stopped" not in got.stats  # exhausted below the incumbent, or a shorter schedule found
-        row = {"add_cells": added, "status": got.status, "states": got.stats.get("states"),
+        row = {"add_cells": added, "status": got.status, "decided": decided, "states": got.stats.get("states"),
                "s": round(budget.now() - began, 3)}
         makespan = None if got.schedule is None else metrics(instance, bind(instance, got.schedule)).makespan
         if got.status == "optimal":  # the class's optimum: a shorter schedule, or the incumbent (in the class)
