@@ -9,6 +9,8 @@ import json
 import subprocess
 import sys
 
+import pytest
+
 HEAVY = ("ortools", "pysat", "rerun", "matplotlib", "dask", "distributed", "scipy")
 PROBE = """
 import json, sys
@@ -87,3 +89,16 @@ def test_a_bille_folder_earlier_on_the_path_does_not_hide_the_installed_package(
             "import bille.instances; print(bille.instances.FOUND)")
     done = subprocess.run([sys.executable, "-S", "-c", code], capture_output=True, text=True)
     assert done.stdout.strip() == "True", done.stderr
+
+
+@pytest.mark.slow
+def test_bille_warm_runs_each_compiled_part():
+    from click.testing import CliRunner
+
+    from bille.tools.cli import cli
+
+    done = CliRunner().invoke(cli, ["warm"])
+    assert done.exit_code == 0, done.output
+    lines = done.output.splitlines()
+    assert [line.split(":")[0] for line in lines] == ["the exact joint search (bfs)", "LaCAM*'s generator and SUO table"]
+    assert all(line.endswith(" s") for line in lines)

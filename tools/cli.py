@@ -30,6 +30,7 @@ COMMANDS = {  # name -> (module, function, the line bille --help shows); each lo
     "run": ("execute.commands", "run", "Execute a schedule on robots over MQTT."),
     "robot-sim": ("execute.commands", "robot_sim", "A simulated robot for bille run."),
     "bench": ("bench.commands", "bench", "Benchmarks, with ratios to baselines of the run."),
+    "warm": ("warm_command", "warm", "Compile the solvers' compiled parts now (the first run's cost)."),
 }
 
 
