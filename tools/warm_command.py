@@ -14,7 +14,8 @@ def warm() -> int:
     configuration generator and SUO table, and the distances on large maps. Numba keeps the
     machine code beside the package (or in its user cache), so only the first run after an
     install compiles, a few seconds; this command is that first run, and later ones only load
-    the code. It solves tiny bundled instances and prints the seconds each part took."""
+    the code. It solves two small instances (lt-4; room-32-32-4 with 20 agents) and prints the
+    seconds each part took."""
     for name, part in (("the exact joint search (bfs)", _joint), ("LaCAM*'s generator and SUO table", _lacam)):
         began = time.perf_counter()
         part()
