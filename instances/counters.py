@@ -8,6 +8,7 @@ Each is None where the method keeps no such count.
 """
 from __future__ import annotations
 
+import numbers
 from dataclasses import dataclass, fields
 
 
@@ -39,10 +40,13 @@ class Counters:
             value = stats.get(f.name)
             if value is None:
                 continue
-            real = "float" in f.type
-            if isinstance(value, bool) or not isinstance(value, (int, float) if real else int):
+            real = "float" in f.type  # NumPy's numbers count as numbers (numbers.Integral, numbers.Real)
+            if isinstance(value, bool) or not isinstance(value, numbers.Real if real else numbers.Integral):
                 raise TypeError(f"stats[{f.name!r}] = {value!r}: expected {'a number' if real else 'a whole number'}")
-            found[f.name] = value
+            if not real:
+                found[f.name] = int(value)
+            else:
+                found[f.name] = value if isinstance(value, (int, float)) else float(value)
         return cls(**found)
 
 
