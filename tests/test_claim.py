@@ -1,6 +1,7 @@
 """A result's claim: what it proves, rendered one way for each output."""
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from bille.instances import load_instance
@@ -79,8 +80,6 @@ def test_the_counts_tools_read_are_typed():
         Result("x", "feasible", stats={"nodes": "3"}).counters
     with pytest.raises(TypeError, match="steps"):
         Counters.of({"steps": True})
-    import numpy as np
-
     counted = Counters.of({"states": np.int64(7), "first_s": np.float64(0.25)})  # NumPy's numbers are numbers
     assert counted.states == 7 and type(counted.states) is int and counted.first_s == 0.25
     counts = solve("compare-4", "lacam").counters  # LaCAM* counts its nodes
