@@ -216,8 +216,8 @@ def solve_in_child(outbox, text: str, method: str, options: dict, limits: Limits
         stats = {k: v for k, v in result.stats.items() if isinstance(v, (int, float, str, bool)) or v is None}
         if result.failure is not None:  # why the run ended without its answer, in the row's stats
             stats.update(failure=result.failure.text, failure_kind=result.failure.kind)
-        expansions = next((int(result.stats[k]) for k in ("expansions", "nodes", "states")
-                           if isinstance(result.stats.get(k), (int, float))), None)
+        counts = result.counters  # the search's effort: LaCAM*'s nodes, or the joint states stored
+        expansions = counts.nodes if counts.nodes is not None else counts.states
         said = result.stats.get("violation") or result.stats.get("contradiction") if result.status == "error" else None
         outbox.send(dict(status=status_key(result.status, result.claim), error=said, makespan=m.makespan if m else None,
                          tiles_traveled=m.tiles_traveled if m else None, lower_bound=result.lower_bound,
