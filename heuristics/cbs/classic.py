@@ -9,6 +9,8 @@ how often each cell is used at each time (:class:`ClassicAvoid`, the conflict-av
 """
 from __future__ import annotations
 
+from functools import cached_property
+
 import numpy as np
 
 from .lowlevel import Path
@@ -42,17 +44,26 @@ class ClassicAvoid:
         self.last = max((p.cost for p in others), default=0)
         length = self.last + 2
         if not others:
-            self.at, self.moves = {}, set()
+            self.keys = self.counts = self.move_keys = np.zeros(0, np.int64)
             return
         cells = matrix(others, length)
         times = np.arange(length, dtype=np.int64)[None, :]
-        # sparse: the robots' cells at each time are few against every cell at every time
-        codes, counts = np.unique((times * size + cells).ravel(), return_counts=True)
-        self.at = dict(zip(codes.tolist(), counts.tolist()))
+        # sparse: the robots' cells at each time are few against every cell at every time;
+        # sorted, as the compiled search looks them up (.lowlevel_compiled)
+        self.keys, self.counts = np.unique((times * size + cells).ravel(), return_counts=True)
         before, after = cells[:, :-1], cells[:, 1:]
         moved = before != after
-        codes = ((times[:, 1:] * size + before) * size + after)[moved]
-        self.moves = set(codes.tolist())
+        self.move_keys = np.unique(((times[:, 1:] * size + before) * size + after)[moved])
+
+    @cached_property
+    def at(self) -> dict[int, int]:
+        """Robots on a cell at a time, keyed ``t * size + cell``."""
+        return dict(zip(self.keys.tolist(), self.counts.tolist()))
+
+    @cached_property
+    def moves(self) -> set[int]:
+        """The moves of step ``t`` from cell ``u`` to ``v``, keyed ``(t * size + u) * size + v``."""
+        return set(self.move_keys.tolist())
 
     def count(self, p: int, q: int, cells: frozenset, t: int) -> int:
         size = self.size

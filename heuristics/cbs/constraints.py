@@ -33,7 +33,7 @@ class Table:
     names (past it, only the ranges remain and they no longer change).
     """
 
-    __slots__ = ("at", "edges", "ranges", "range_cells", "min_arrival", "last", "_stay")
+    __slots__ = ("at", "edges", "ranges", "range_cells", "min_arrival", "last", "_stay", "_flat")
 
     def __init__(self, constraints: tuple) -> None:
         self.at: dict[int, set[int]] = {}
@@ -56,6 +56,7 @@ class Table:
         self.range_cells = frozenset(self.ranges)
         self.last = max(last, self.min_arrival)
         self._stay: dict[int, int] = {}
+        self._flat = None  # the arrays of the compiled search (.lowlevel_compiled.flat_table)
 
     def stay_from(self, pose: int, cells: frozenset) -> int:
         """The earliest time from which a robot may stand still at ``pose`` (standing on

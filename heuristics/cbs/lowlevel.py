@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import heapq
 from dataclasses import dataclass
+from collections.abc import Sequence
 from typing import Callable
 
 from bille.instances.walking import UNREACHABLE
@@ -39,6 +40,7 @@ class Agent:
     dist: list[int]  # steps to the goal per pose (0 everywhere without a goal)
     home: list[bool]  # whether a pose is a goal pose (every pose without a goal)
     goal: int  # front-foot goal cell, -1 for none
+    arrays: tuple | None = None  # (succ, wait, dist, home) as numpy: a point robot searched compiled
 
     def stand(self, pose: int) -> frozenset:
         """The cells of standing still at ``pose``."""
@@ -206,8 +208,8 @@ class MDD:
     ``t``; ``steps[t]``, the moves ``(p, q, cells)`` of step ``t``."""
 
     cost: int
-    levels: tuple[frozenset, ...]
-    steps: tuple[tuple[tuple[int, int, frozenset], ...], ...]
+    levels: Sequence[frozenset]  # a tuple, or read when asked for (.mdd_compiled)
+    steps: Sequence[tuple[tuple[int, int, frozenset], ...]]
 
 
 def mdd(agent: Agent, table: Table, classic: bool, cost: int) -> MDD:

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
@@ -20,11 +21,21 @@ from ..joint import NO_WALK, JointProblem, check_tables, require_path_planning
 from .lowlevel import Agent, Stopped
 from .search import FOCALS, HEURISTICS, OBJECTIVES, Node, OutOfBudget, Settings, Tree
 
-def agents_of(problem: JointProblem) -> list[Agent]:
+def agents_of(problem: JointProblem, compiled: bool = False) -> list[Agent]:
+    """The robots as the low level sees them; ``compiled``: with the arrays of its compiled search
+    (point robots, :mod:`.lowlevel_compiled`)."""
     agents = []
     for k, (walk, goal) in enumerate(zip(problem.walks, problem.goals)):
-        agents.append(Agent(k, problem.start[k], walk.moves, problem.dist_lists[k], problem.home_lists[k], goal))
+        agents.append(Agent(k, problem.start[k], walk.moves, problem.dist_lists[k], problem.home_lists[k], goal,
+                            arrays_of(problem, k) if compiled else None))
     return agents
+
+
+def arrays_of(problem: JointProblem, k: int) -> tuple:
+    """Robot ``k``'s arrays for the compiled low level: its walk's moves, wait action, distances
+    to its goal and goal poses."""
+    walk = problem.walks[k]
+    return walk.succ, walk.wait, problem.dist_table[k], problem.home_table[k]
 
 
 def _check_movesets(instance: Instance) -> None:
@@ -153,7 +164,8 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
                              "cost_lower": lower, "objective": objective, "expanded": expanded})
 
     tree = Tree(agents, instance.collisions == "classic", settings, budget.expired, stats,
-                instance.width if _grid_steps(instance) else None, told)
+                instance.width if _grid_steps(instance) else None, told,
+                arrays_of=partial(arrays_of, problem) if instance.collisions == "classic" else None)
     try:
         unreachable = problem.unreachable()
         if unreachable:

@@ -31,7 +31,9 @@ Under the makespan objective ``g`` is the largest cost and no estimate is added.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
+
+from bille.instances.jit import loaded
 
 from .classic import ClassicAvoid, matrix, meeting
 from .conflicts import EDGEC, KIND_NAMES, TARGET, VERTEXC, branches, first_conflict, forced
@@ -46,6 +48,7 @@ OBJECTIVES = ("sum-of-costs", "makespan")
 HEURISTICS = ("wdg", "cg", "none")
 FOCALS = ("conflicts", "ees")
 PAIR_NODES = 64  # constraint-tree nodes for solving one pair of robots alone (WDG)
+SWITCH = 200_000  # low-level expansions in Python (a few tenths of a second) before loading the compiled one
 
 
 class OutOfBudget(Exception):
@@ -90,7 +93,7 @@ class Tree:
     grid's, where rectangle reasoning applies (point robots moving one cell at a time)."""
 
     def __init__(self, agents: list[Agent], classic: bool, settings: Settings, poll, stats: dict,
-                 width: int | None = None, told=None, corridors: tuple | None = None) -> None:
+                 width: int | None = None, told=None, corridors: tuple | None = None, arrays_of=None) -> None:
         self.agents, self.classic, self.settings = agents, classic, settings
         self.width = width if classic and settings.rectangle else None
         self.corridors = Corridors(agents, corridors) if classic and settings.corridor else None
@@ -101,6 +104,8 @@ class Tree:
         self._pairs: dict[tuple, int | None] = {}
         self.lower = 0
         self.told = told  # told(lower, expanded) each time the proved bound rises (the top-level search)
+        self.arrays_of = arrays_of  # robot index -> its compiled search's arrays (point robots), or None
+        self.scratch = None  # the compiled low level's working arrays, shared with the pairs' trees
 
     # ---- paths ------------------------------------------------------------------------------
 
@@ -112,14 +117,34 @@ class Tree:
             found = self._tables[constraints] = Table(constraints)
         return found
 
+    def _agent(self, k: int) -> Agent:
+        """Robot ``k``; the robots given their compiled search's arrays first, where this tree can
+        have them (``arrays_of``) and Numba is loaded or the searches in Python have taken
+        :data:`SWITCH` expansions (the two searches find the same paths)."""
+        agent = self.agents[k]
+        if agent.arrays is None and self.arrays_of is not None and (
+                loaded() or self.stats.get("low_expanded", 0) >= SWITCH):
+            for i, other in enumerate(self.agents):
+                self.agents[i] = replace(other, arrays=self.arrays_of(other.index))
+            agent = self.agents[k]
+        return agent
+
     def cost(self, k: int, path: Path) -> int:
         if self.agents[k].goal < 0 and self.soc:
             return 0
         return path.cost
 
     def replan(self, k: int, constraints: tuple, paths: list[Path | None]) -> Path | None:
+        agent = self._agent(k)
         if self.classic:  # a pose is a cell: one count per cell and time, from numpy
-            avoid = ClassicAvoid(paths, k, len(self.agents[k].dist))
+            avoid = ClassicAvoid(paths, k, len(agent.dist))
+            if agent.arrays is not None:
+                from . import lowlevel_compiled
+
+                if self.scratch is None:
+                    self.scratch = lowlevel_compiled.Scratch()
+                return lowlevel_compiled.search(agent, agent.arrays, self.table(constraints), avoid, self.scratch,
+                                                poll=self.poll, stats=self.stats)
         else:
             avoid = Avoid(paths, k, self.classic, [a.stand for a in self.agents])
         return search(self.agents[k], self.table(constraints), avoid, self.classic, poll=self.poll, stats=self.stats)
@@ -132,8 +157,14 @@ class Tree:
         if found is None:
             if len(self._mdds) > 20_000:
                 self._mdds.clear()
-            found = self._mdds[key] = mdd(self.agents[k], self.table(node.constraints[k]), self.classic,
-                                          node.paths[k].cost)
+            agent, table, cost = self._agent(k), self.table(node.constraints[k]), node.paths[k].cost
+            if agent.arrays is not None:
+                from .mdd_compiled import mdd as compiled_mdd
+
+                found = compiled_mdd(agent, agent.arrays, table, cost)
+            else:
+                found = mdd(agent, table, self.classic, cost)
+            self._mdds[key] = found
         return found
 
     # ---- nodes ------------------------------------------------------------------------------
@@ -242,7 +273,9 @@ class Tree:
         pair = Tree([self.agents[i], self.agents[j]], self.classic,
                     Settings(heuristic="cg", rectangle=self.settings.rectangle, corridor=self.settings.corridor,
                              max_nodes=PAIR_NODES), self.poll, {},
-                    self.width, corridors=None if self.corridors is None else self.corridors.caches)
+                    self.width, corridors=None if self.corridors is None else self.corridors.caches,
+                    arrays_of=self.arrays_of)
+        pair.scratch = self.scratch
         start = pair.root((node.constraints[i], node.constraints[j]), [node.paths[i], node.paths[j]])
         found = pair.best(start)
         base = node.costs[i] + node.costs[j]

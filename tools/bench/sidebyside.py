@@ -125,6 +125,10 @@ def side_by_side(folder: Path, rows, peers: dict[str, Path], seconds: float, kin
             from bille.heuristics.lacam.scatter_compiled import warm_up
 
             warm_up()
+        else:  # the compiled low level, which a run loads once its Python searches have taken long
+            from bille.heuristics.cbs.mdd_compiled import warm_up
+
+            warm_up()
         for k in counts:
             inst = from_movingai(map_file, scen, agents=k)
             row = {"map": name, "agents": k, "bille": mine(inst, seconds), "peers": {}}
