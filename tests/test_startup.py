@@ -100,5 +100,6 @@ def test_bille_warm_runs_each_compiled_part():
     done = CliRunner().invoke(cli, ["warm"])
     assert done.exit_code == 0, done.output
     lines = done.output.splitlines()
-    assert [line.split(":")[0] for line in lines] == ["the exact joint search (bfs)", "LaCAM*'s generator and SUO table"]
+    assert [line.split(":")[0] for line in lines] == ["the exact joint search (bfs)", "LaCAM*'s generator and SUO table",
+                                                      "conflict-based search's low level"]
     assert all(line.endswith(" s") for line in lines)
