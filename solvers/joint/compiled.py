@@ -25,16 +25,36 @@ def _same(states, r, row):  # pragma: no cover - compiled
     return True
 
 
+ROW_BITS = 40  # an entry: the row number + 1 in its low bits, above them a tag of the row's hash
+ROWS = (np.int64(1) << np.int64(ROW_BITS)) - 1
+
+
+@jit
+def tag(row):  # pragma: no cover - compiled
+    """The high bits an entry of ``row`` carries: its hash's, so that most slots of other rows
+    are passed over without reading their states."""
+    return (hash_row(row) >> np.int64(ROW_BITS)) << np.int64(ROW_BITS)
+
+
 @jit
 def lookup(states, table, row):  # pragma: no cover - compiled
-    """The slot of ``row`` in ``table``: its entry if stored, else the empty slot where it goes."""
+    """The slot of ``row`` in ``table``: its entry if stored, else the empty slot where it goes
+    (an entry ``tag(row) | (row number + 1)``; :func:`stored` reads the row number back)."""
     mask = table.shape[0] - 1
-    slot = hash_row(row) & mask
+    h = hash_row(row)
+    slot = h & mask
+    high = (h >> np.int64(ROW_BITS)) << np.int64(ROW_BITS)
     while True:
         e = table[slot]
-        if e == 0 or _same(states, e - 1, row):
+        if e == 0 or ((e & ~ROWS) == high and _same(states, (e & ROWS) - 1, row)):
             return slot
         slot = (slot + 1) & mask
+
+
+@jit
+def stored(entry):  # pragma: no cover - compiled
+    """The row number of a table entry (-1 for an empty slot)."""
+    return (entry & ROWS) - 1
 
 
 @jit
@@ -43,10 +63,11 @@ def rehash(states, n, size):  # pragma: no cover - compiled
     table = np.zeros(size, dtype=np.int64)
     mask = size - 1
     for r in range(n):
-        slot = hash_row(states[r]) & mask
+        h = hash_row(states[r])
+        slot = h & mask
         while table[slot] != 0:
             slot = (slot + 1) & mask
-        table[slot] = r + 1
+        table[slot] = ((h >> np.int64(ROW_BITS)) << np.int64(ROW_BITS)) | (r + 1)
     return table
 
 

@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .compiled import jit, connected, popcount, lookup
+from .compiled import jit, connected, popcount, lookup, tag
 
 WAIT, MOTION, PICK, PLACE = 0, 1, 2, 3  # bille.instances.moveset.Kind
 SEARCH, FIND, COLLECT = 0, 1, 2  # modes of expand
@@ -372,7 +372,7 @@ def expand(mode, states, parent, table, counters, cursor, hi, work, max_rows, de
             for k in range(L):
                 states[r, k] = row[k]
             parent[r] = pos
-            table[slot] = r + 1
+            table[slot] = tag(row) | (r + 1)
             counters[N_STATES] = r + 1
             counters[N_TABLE] += 1
             goal = True
