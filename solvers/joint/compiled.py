@@ -40,8 +40,12 @@ def tag(row):  # pragma: no cover - compiled
 def lookup(states, table, row):  # pragma: no cover - compiled
     """The slot of ``row`` in ``table``: its entry if stored, else the empty slot where it goes
     (an entry ``tag(row) | (row number + 1)``; :func:`stored` reads the row number back)."""
+    return _find(states, table, row, hash_row(row))
+
+
+@jit
+def _find(states, table, row, h):  # pragma: no cover - compiled
     mask = table.shape[0] - 1
-    h = hash_row(row)
     slot = h & mask
     high = (h >> np.int64(ROW_BITS)) << np.int64(ROW_BITS)
     while True:
@@ -119,3 +123,38 @@ def connected(tiles, width, height, total, anchor, stack, seen, stamp):  # pragm
                 top += 1
                 stack[top] = nc
     return count == total
+
+
+@jit
+def store(pend, n, goals, hs, states, parent, table, counters, pos, touch):  # pragma: no cover - compiled
+    """Store the new rows among ``pend[:n]`` (successors of row ``pos``, in order), as the search
+    stores each one it meets: their counts in ``counters`` (states, table entries). Returns the
+    row of the first goal state stored (``goals[i]``), the rest left unstored, or -1.
+
+    The rows are looked up after two passes that only read: their slots, then the first state
+    each slot names. The reads of one pass do not wait for each other, so the memory is fetched
+    for all the rows at once instead of one miss after another; the lookups then find it cached."""
+    mask = table.shape[0] - 1
+    acc = np.int64(0)
+    for i in range(n):
+        h = hash_row(pend[i])
+        hs[i] = h
+        acc += table[h & mask]
+    for i in range(n):
+        e = table[hs[i] & mask]
+        if e != 0:
+            acc += states[(e & ROWS) - 1, 0]
+    touch[0] = acc  # kept, so that the reads are not optimised away
+    for i in range(n):
+        slot = _find(states, table, pend[i], hs[i])
+        if table[slot] != 0:
+            continue
+        r = counters[0]
+        states[r, :] = pend[i]
+        parent[r] = pos
+        table[slot] = ((hs[i] >> np.int64(ROW_BITS)) << np.int64(ROW_BITS)) | (r + 1)
+        counters[0] = r + 1
+        counters[1] += 1
+        if goals[i]:
+            return r
+    return -1

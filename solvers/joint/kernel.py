@@ -7,15 +7,17 @@ successors of a state are its joint actions under docs/rules.md, "One time step"
 backtracking over the robots from the compiled pose tables (:mod:`bille.instances.posegraph`),
 the same tables :func:`bille.instances.rules.apply` reads:
 
-1. precondition, 2. workspace and 4. support per robot (:func:`_candidates`; a robot's new feet
+1. precondition, 2. workspace and 4. support per robot (the candidates; a robot's new feet
    cannot be picked from under it nor placed on by another in the same step without a collision,
    so the tiles before the step decide rule 4, as in :func:`bille.instances.successors.candidate_actions`);
-3. collision while choosing each robot's action (:func:`_fits`): disjoint collision sets, or the
+3. collision while choosing each robot's action (:func:`.marks.fits`): disjoint collision sets, or the
    classic convention (vertex, swap, exclusive pick/place targets);
 5. connectivity of the new tiles at the leaf (:func:`connected`).
 
 The search keeps every state found in ``states`` (a layer is a range of rows), a parent index per
-state, and an open-addressing hash table of row numbers + 1. :func:`expand` works through a range
+state, and an open-addressing hash table of row numbers + 1 (:mod:`.compiled`). The successors of
+a state are stored together, in the order met, once its joint actions are done or 32 are waiting
+(:func:`.compiled.store`: their memory fetched at once). :func:`expand` works through a range
 of rows and stops after ``work`` steps of the backtracking, keeping its place in ``cursor`` so
 the caller can look at its budget between calls and go on; it also stops when the table is half
 full (the caller doubles it, :func:`rehash`) or the rows run out.
@@ -35,7 +37,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .compiled import jit, connected, popcount, lookup, tag
+from .compiled import jit, connected, popcount, store
+from .marks import fits, release, unmark
 
 WAIT, MOTION, PICK, PLACE = 0, 1, 2, 3  # bille.instances.moveset.Kind
 SEARCH, FIND, COLLECT = 0, 1, 2  # modes of expand
@@ -47,79 +50,15 @@ TILE_BITS = 63
 
 
 @jit
-def _fits(i, a, g, p, c, classic, coll, carry, succ, target, occ, endocc, startocc, tgt, after):  # pragma: no cover
-    """Whether robot ``i``'s action ``a`` is free of collisions with the robots chosen before it
-    (rule 3, or the classic convention); marks its cells if so."""
-    if classic:
-        v = succ[g, p, a]
-        t = target[g, p, a]
-        if endocc[v] != 0:
-            return False
-        j = startocc[v] - 1
-        if j >= 0 and j < i and after[j] == p:
-            return False
-        if tgt[p] != 0 or tgt[v] != 0:
-            return False
-        if t >= 0 and (startocc[t] != 0 or endocc[t] != 0 or tgt[t] != 0):
-            return False
-        endocc[v] = i + 1
-        if t >= 0:
-            tgt[t] = i + 1
-        after[i] = v
-        return True
-    for k in range(coll.shape[3]):
-        cell = coll[g, p, a, k]
-        if cell >= 0 and occ[cell] != 0 and occ[cell] != i + 1:
-            return False
-    if c:
-        for k in range(carry.shape[3]):
-            cell = carry[g, p, a, k]
-            if cell >= 0 and occ[cell] != 0 and occ[cell] != i + 1:
-                return False
-    for k in range(coll.shape[3]):
-        cell = coll[g, p, a, k]
-        if cell >= 0:
-            occ[cell] = i + 1
-    if c:
-        for k in range(carry.shape[3]):
-            cell = carry[g, p, a, k]
-            if cell >= 0:
-                occ[cell] = i + 1
-    after[i] = succ[g, p, a]
+def _goal(r, counters, cursor, pos):  # pragma: no cover - compiled
+    """Whether a goal state was stored (at row ``r``, -1 if none): noted, and the search's place
+    set after the state at ``pos``."""
+    if r < 0:
+        return False
+    counters[GOAL_ROW] = r
+    cursor[0] = pos + 1
+    cursor[2] = 0
     return True
-
-
-@jit
-def _unmark(i, a, g, p, c, classic, coll, carry, succ, target, occ, endocc, tgt):  # pragma: no cover
-    if classic:
-        endocc[succ[g, p, a]] = 0
-        t = target[g, p, a]
-        if t >= 0:
-            tgt[t] = 0
-        return
-    for k in range(coll.shape[3]):
-        cell = coll[g, p, a, k]
-        if cell >= 0 and occ[cell] == i + 1:
-            occ[cell] = 0
-    if c:
-        for k in range(carry.shape[3]):
-            cell = carry[g, p, a, k]
-            if cell >= 0 and occ[cell] == i + 1:
-                occ[cell] = 0
-
-
-@jit
-def _release(level, m, bits, classic, cand, choice, gid, pose, carrying, coll, carry, succ, target, occ, endocc, tgt,
-             startocc):  # pragma: no cover - compiled
-    """Leave a state in the middle of its backtracking: every mark of the robots chosen so far
-    undone (cell marks; the bit masks need none), so the scratch is clean for the next state."""
-    for i in range(level + 1):
-        if choice[i] >= 0 and not bits:
-            _unmark(i, cand[i, choice[i]], gid[i], pose[i], carrying[i], classic, coll, carry, succ, target, occ,
-                    endocc, tgt)
-    if classic:
-        for i in range(m):
-            startocc[pose[i]] = 0
 
 
 @jit
@@ -129,7 +68,7 @@ def expand(mode, states, parent, table, counters, cursor, hi, work, max_rows, de
            bit_of, cell_of, fixed, fixed_count, anchor, goal_words, dist, sym_start, sym_idx, masks, W, reach, fetch,
            # scratch, allocated once by the caller
            tiles, occ, endocc, startocc, tgt, cand, ncand, choice, pose, carrying, after, vals, row, seen, stack,
-           stamp, usedw,
+           stamp, usedw, pend, pgoal, hs, touch,
            # FIND: the successor to match (its canonical row) and where its joint action goes;
            # COLLECT: rows and joint actions of every successor (raw, not canonical)
            match, out_actions, out_rows):  # pragma: no cover - compiled
@@ -139,6 +78,7 @@ def expand(mode, states, parent, table, counters, cursor, hi, work, max_rows, de
     big = U < (1 << 40)
     pos = cursor[0]
     steps = 0
+    npend = 0  # successors of the state at pos met but not yet stored (.compiled.store), at most K
     while pos < hi:
         if cursor[2] == 0 and steps >= work:  # between two states: nothing marked, nothing to undo
             cursor[0] = pos
@@ -199,7 +139,7 @@ def expand(mode, states, parent, table, counters, cursor, hi, work, max_rows, de
                         for w in range(W):
                             usedw[i + 1, w] = usedw[i, w] | masks[gid[i], pose[i], cand[i, choice[i]], carrying[i], w]
                 elif choice[i] >= 0:
-                    _fits(i, cand[i, choice[i]], gid[i], pose[i], carrying[i], classic, coll, carry, succ, target,
+                    fits(i, cand[i, choice[i]], gid[i], pose[i], carrying[i], classic, coll, carry, succ, target,
                           occ, endocc, startocc, tgt, after)
         else:
             level = 0
@@ -208,10 +148,15 @@ def expand(mode, states, parent, table, counters, cursor, hi, work, max_rows, de
             usedw[0, w] = 0
         # ---- backtracking over the robots' candidates (rule 3 as they are chosen) ---------------
         while level >= 0:
-            if steps >= work or counters[N_STATES] >= max_rows or 2 * counters[N_TABLE] >= table.shape[0]:
-                # the caller may grow the table, then resume here
-                _release(level, m, bits, classic, cand, choice, gid, pose, carrying, coll, carry, succ, target, occ,
+            if steps >= work or counters[N_STATES] + npend >= max_rows or \
+                    2 * (counters[N_TABLE] + npend) >= table.shape[0]:  # the caller may grow the table, then resume
+                release(level, m, bits, classic, cand, choice, gid, pose, carrying, coll, carry, succ, target, occ,
                          endocc, tgt, startocc)
+                got = _goal(store(pend, npend, pgoal, hs, states, parent, table, counters, pos, touch), counters,
+                            cursor, pos)
+                npend = 0
+                if got:
+                    return GOAL
                 cursor[0] = pos
                 cursor[1] = level
                 cursor[2] = 1
@@ -225,7 +170,7 @@ def expand(mode, states, parent, table, counters, cursor, hi, work, max_rows, de
             p = pose[level]
             c = carrying[level]
             if choice[level] >= 0 and not bits:
-                _unmark(level, cand[level, choice[level]], g, p, c, classic, coll, carry, succ, target, occ, endocc,
+                unmark(level, cand[level, choice[level]], g, p, c, classic, coll, carry, succ, target, occ, endocc,
                         tgt)
             choice[level] += 1
             ok = False
@@ -241,7 +186,7 @@ def expand(mode, states, parent, table, counters, cursor, hi, work, max_rows, de
                         for w in range(W):
                             usedw[level + 1, w] = usedw[level, w] | masks[g, p, a, c, w]
                         break
-                elif _fits(level, a, g, p, c, classic, coll, carry, succ, target, occ, endocc, startocc, tgt,
+                elif fits(level, a, g, p, c, classic, coll, carry, succ, target, occ, endocc, startocc, tgt,
                            after):
                     ok = True
                     break
@@ -361,20 +306,10 @@ def expand(mode, states, parent, table, counters, cursor, hi, work, max_rows, de
                 if same:
                     for i in range(m):
                         out_actions[0, i] = cand[i, choice[i]]
-                    _release(level, m, bits, classic, cand, choice, gid, pose, carrying, coll, carry, succ, target,
+                    release(level, m, bits, classic, cand, choice, gid, pose, carrying, coll, carry, succ, target,
                              occ, endocc, tgt, startocc)
                     return GOAL
                 continue
-            slot = lookup(states, table, row)
-            if table[slot] != 0:
-                continue
-            r = counters[N_STATES]
-            for k in range(L):
-                states[r, k] = row[k]
-            parent[r] = pos
-            table[slot] = tag(row) | (r + 1)
-            counters[N_STATES] = r + 1
-            counters[N_TABLE] += 1
             goal = True
             for k in range(nT):
                 if row[nR + k] != goal_words[k]:
@@ -384,16 +319,24 @@ def expand(mode, states, parent, table, counters, cursor, hi, work, max_rows, de
                     if (vals[i] & 1) != 0 or dist[i, vals[i] >> 1] != 0:
                         goal = False
                         break
-            if goal:
-                counters[GOAL_ROW] = r
-                _release(level, m, bits, classic, cand, choice, gid, pose, carrying, coll, carry, succ, target, occ,
-                         endocc, tgt, startocc)
-                cursor[0] = pos + 1
-                cursor[2] = 0
-                return GOAL
+            for k in range(L):  # stored with the state's other successors, or when K are waiting
+                pend[npend, k] = row[k]
+            pgoal[npend] = goal
+            npend += 1
+            if npend == pend.shape[0]:
+                npend = 0
+                if _goal(store(pend, pend.shape[0], pgoal, hs, states, parent, table, counters, pos, touch), counters,
+                         cursor, pos):
+                    release(level, m, bits, classic, cand, choice, gid, pose, carrying, coll, carry, succ, target,
+                             occ, endocc, tgt, startocc)
+                    return GOAL
+        got = _goal(store(pend, npend, pgoal, hs, states, parent, table, counters, pos, touch), counters, cursor, pos)
+        npend = 0
         if classic:
             for i in range(m):
                 startocc[pose[i]] = 0
+        if got:
+            return GOAL
         cursor[2] = 0
         pos += 1
     cursor[0] = pos

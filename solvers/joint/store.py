@@ -16,6 +16,7 @@ from .compiled import rehash
 from .tables import Tables
 
 NO_BOUND = 1 << 62
+PENDING = 32  # successors of one state the kernel stores together (.compiled.store)
 WORK = 1 << 16  # backtracking steps between two looks at the budget, over the robots (a few ms)
 
 
@@ -62,7 +63,9 @@ def working_arrays(t: Tables, n: int, A: int, m: int, L: int) -> tuple:
     return (tiles, np.zeros(n, np.int64), np.zeros(n, np.int64), np.zeros(n, np.int64), np.zeros(n, np.int64),
             np.zeros((mm, A), np.int64), np.zeros(mm, np.int64), np.full(mm, -1, np.int64), np.zeros(mm, np.int64),
             np.zeros(mm, np.int64), np.zeros(mm, np.int64), np.zeros(mm, np.int64), np.zeros(L, np.int64),
-            np.zeros(n, np.int64), np.zeros(n, np.int64), np.zeros(1, np.int64), np.zeros((mm + 1, max(t.W, 1)), np.int64))
+            np.zeros(n, np.int64), np.zeros(n, np.int64), np.zeros(1, np.int64), np.zeros((mm + 1, max(t.W, 1)), np.int64),
+            np.zeros((PENDING, L), np.int64), np.zeros(PENDING, np.int64), np.zeros(PENDING, np.int64),
+            np.zeros(1, np.int64))
 
 
 def successors(t: Tables, n: int, row: np.ndarray, cap: int = 1 << 16) -> tuple[np.ndarray, np.ndarray]:
