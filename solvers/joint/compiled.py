@@ -126,10 +126,11 @@ def connected(tiles, width, height, total, anchor, stack, seen, stamp):  # pragm
 
 
 @jit
-def store(pend, n, goals, hs, states, parent, table, counters, pos, touch):  # pragma: no cover - compiled
-    """Store the new rows among ``pend[:n]`` (successors of row ``pos``, in order), as the search
-    stores each one it meets: their counts in ``counters`` (states, table entries). Returns the
-    row of the first goal state stored (``goals[i]``), the rest left unstored, or -1.
+def store(pend, n, links, hs, states, parent, table, counters, touch):  # pragma: no cover - compiled
+    """Store the new rows among ``pend[:n]`` in order, as the search stores each one it meets
+    (``links[i]``: twice the row of the state it succeeds, plus 1 for a goal state): their counts
+    in ``counters`` (states, table entries). Returns the row of the first goal state stored, the
+    rows after it left unstored, or -1.
 
     The rows are looked up after two passes that only read: their slots, then the first state
     each slot names. The reads of one pass do not wait for each other, so the memory is fetched
@@ -151,10 +152,10 @@ def store(pend, n, goals, hs, states, parent, table, counters, pos, touch):  # p
             continue
         r = counters[0]
         states[r, :] = pend[i]
-        parent[r] = pos
+        parent[r] = links[i] >> 1
         table[slot] = ((hs[i] >> np.int64(ROW_BITS)) << np.int64(ROW_BITS)) | (r + 1)
         counters[0] = r + 1
         counters[1] += 1
-        if goals[i]:
+        if links[i] & 1:
             return r
     return -1

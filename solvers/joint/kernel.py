@@ -15,9 +15,9 @@ the same tables :func:`bille.instances.rules.apply` reads:
 5. connectivity of the new tiles at the leaf (:func:`connected`).
 
 The search keeps every state found in ``states`` (a layer is a range of rows), a parent index per
-state, and an open-addressing hash table of row numbers + 1 (:mod:`.compiled`). The successors of
-a state are stored together, in the order met, once its joint actions are done or 32 are waiting
-(:func:`.compiled.store`: their memory fetched at once). :func:`expand` works through a range
+state, and an open-addressing hash table of row numbers + 1 (:mod:`.compiled`). Successors are
+stored 128 at a time, in the order met (:func:`.compiled.store`: their memory fetched at once),
+and all of them before the kernel returns. :func:`expand` works through a range
 of rows and stops after ``work`` steps of the backtracking, keeping its place in ``cursor`` so
 the caller can look at its budget between calls and go on; it also stops when the table is half
 full (the caller doubles it, :func:`rehash`) or the rows run out.
@@ -50,13 +50,13 @@ TILE_BITS = 63
 
 
 @jit
-def _goal(r, counters, cursor, pos):  # pragma: no cover - compiled
+def _goal(r, counters, cursor, parent):  # pragma: no cover - compiled
     """Whether a goal state was stored (at row ``r``, -1 if none): noted, and the search's place
-    set after the state at ``pos``."""
+    set after the state it succeeds."""
     if r < 0:
         return False
     counters[GOAL_ROW] = r
-    cursor[0] = pos + 1
+    cursor[0] = parent[r] + 1
     cursor[2] = 0
     return True
 
@@ -78,11 +78,12 @@ def expand(mode, states, parent, table, counters, cursor, hi, work, max_rows, de
     big = U < (1 << 40)
     pos = cursor[0]
     steps = 0
-    npend = 0  # successors of the state at pos met but not yet stored (.compiled.store), at most K
+    npend = 0  # successors met but not yet stored (.compiled.store), at most K; none between two calls
     while pos < hi:
         if cursor[2] == 0 and steps >= work:  # between two states: nothing marked, nothing to undo
-            cursor[0] = pos
-            return PAUSED
+            got = _goal(store(pend, npend, pgoal, hs, states, parent, table, counters, touch), counters, cursor, parent)
+            cursor[0] = cursor[0] if got else pos
+            return GOAL if got else PAUSED
         # ---- the state at row pos: robots, tiles, each robot's candidate actions ----------------
         steps += 1  # a state without successors costs its decoding too
         src = states[pos]
@@ -152,8 +153,8 @@ def expand(mode, states, parent, table, counters, cursor, hi, work, max_rows, de
                     2 * (counters[N_TABLE] + npend) >= table.shape[0]:  # the caller may grow the table, then resume
                 release(level, m, bits, classic, cand, choice, gid, pose, carrying, coll, carry, succ, target, occ,
                          endocc, tgt, startocc)
-                got = _goal(store(pend, npend, pgoal, hs, states, parent, table, counters, pos, touch), counters,
-                            cursor, pos)
+                got = _goal(store(pend, npend, pgoal, hs, states, parent, table, counters, touch), counters, cursor,
+                            parent)
                 npend = 0
                 if got:
                     return GOAL
@@ -319,25 +320,23 @@ def expand(mode, states, parent, table, counters, cursor, hi, work, max_rows, de
                     if (vals[i] & 1) != 0 or dist[i, vals[i] >> 1] != 0:
                         goal = False
                         break
-            for k in range(L):  # stored with the state's other successors, or when K are waiting
+            for k in range(L):  # stored when K are waiting, in the order met
                 pend[npend, k] = row[k]
-            pgoal[npend] = goal
+            pgoal[npend] = 2 * pos + goal
             npend += 1
             if npend == pend.shape[0]:
                 npend = 0
-                if _goal(store(pend, pend.shape[0], pgoal, hs, states, parent, table, counters, pos, touch), counters,
-                         cursor, pos):
+                if _goal(store(pend, pend.shape[0], pgoal, hs, states, parent, table, counters, touch), counters,
+                         cursor, parent):
                     release(level, m, bits, classic, cand, choice, gid, pose, carrying, coll, carry, succ, target,
                              occ, endocc, tgt, startocc)
                     return GOAL
-        got = _goal(store(pend, npend, pgoal, hs, states, parent, table, counters, pos, touch), counters, cursor, pos)
-        npend = 0
         if classic:
             for i in range(m):
                 startocc[pose[i]] = 0
-        if got:
-            return GOAL
         cursor[2] = 0
         pos += 1
+    if _goal(store(pend, npend, pgoal, hs, states, parent, table, counters, touch), counters, cursor, parent):
+        return GOAL
     cursor[0] = pos
     return DONE

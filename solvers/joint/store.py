@@ -16,7 +16,7 @@ from .compiled import rehash
 from .tables import Tables
 
 NO_BOUND = 1 << 62
-PENDING = 32  # successors of one state the kernel stores together (.compiled.store)
+PENDING = 128  # successors the kernel stores together (.compiled.store)
 WORK = 1 << 16  # backtracking steps between two looks at the budget, over the robots (a few ms)
 
 
