@@ -32,7 +32,7 @@ from bille.instances.run import Budget, Events
 
 from . import kernel
 from .cells import Cells
-from .compiled import jit, lookup, stored
+from .compiled import jit, lookup, row_of
 from .store import Outcome, Store, replay, working_arrays
 from .tables import Tables, reverse_tables
 
@@ -79,7 +79,7 @@ def _meet(states, lo, hi, other, table):  # pragma: no cover - compiled
     for r in range(lo, hi):
         slot = lookup(other, table, states[r])
         if table[slot] != 0:
-            return r, stored(table[slot])
+            return r, row_of(table[slot])
     return -1, -1
 
 

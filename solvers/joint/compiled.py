@@ -1,5 +1,6 @@
 """Small compiled parts of the joint search: the hash table of stored states (open addressing
-over row numbers + 1), bit counts and the connectivity flood fill (rule 5)."""
+over row numbers + 1, each entry tagged with its state's hash) and the storing of a batch of
+successors, bit counts and the connectivity flood fill (rule 5)."""
 from __future__ import annotations
 
 import numpy as np
@@ -25,21 +26,16 @@ def _same(states, r, row):  # pragma: no cover - compiled
     return True
 
 
-ROW_BITS = 40  # an entry: the row number + 1 in its low bits, above them a tag of the row's hash
+# an entry: the row number + 1 in its low bits, above them the high bits of the row's hash (a tag:
+# most slots of other rows are passed over without reading their states)
+ROW_BITS = 40
 ROWS = (np.int64(1) << np.int64(ROW_BITS)) - 1
-
-
-@jit
-def tag(row):  # pragma: no cover - compiled
-    """The high bits an entry of ``row`` carries: its hash's, so that most slots of other rows
-    are passed over without reading their states."""
-    return (hash_row(row) >> np.int64(ROW_BITS)) << np.int64(ROW_BITS)
 
 
 @jit
 def lookup(states, table, row):  # pragma: no cover - compiled
     """The slot of ``row`` in ``table``: its entry if stored, else the empty slot where it goes
-    (an entry ``tag(row) | (row number + 1)``; :func:`stored` reads the row number back)."""
+    (an entry: the tag of its hash and the row number + 1; :func:`row_of` reads the number back)."""
     return _find(states, table, row, hash_row(row))
 
 
@@ -56,7 +52,7 @@ def _find(states, table, row, h):  # pragma: no cover - compiled
 
 
 @jit
-def stored(entry):  # pragma: no cover - compiled
+def row_of(entry):  # pragma: no cover - compiled
     """The row number of a table entry (-1 for an empty slot)."""
     return (entry & ROWS) - 1
 

@@ -78,7 +78,7 @@ def expand(mode, states, parent, table, counters, cursor, hi, work, max_rows, de
     big = U < (1 << 40)
     pos = cursor[0]
     steps = 0
-    npend = 0  # successors met but not yet stored (.compiled.store), at most K; none between two calls
+    npend = 0  # successors met but not yet stored (.compiled.store), at most PENDING; none between calls
     while pos < hi:
         if cursor[2] == 0 and steps >= work:  # between two states: nothing marked, nothing to undo
             got = _goal(store(pend, npend, pgoal, hs, states, parent, table, counters, touch), counters, cursor, parent)
@@ -320,7 +320,7 @@ def expand(mode, states, parent, table, counters, cursor, hi, work, max_rows, de
                     if (vals[i] & 1) != 0 or dist[i, vals[i] >> 1] != 0:
                         goal = False
                         break
-            for k in range(L):  # stored when K are waiting, in the order met
+            for k in range(L):  # stored when pend is full, in the order met
                 pend[npend, k] = row[k]
             pgoal[npend] = 2 * pos + goal
             npend += 1
