@@ -19,8 +19,8 @@ that every such path has is *cardinal* for the robot (any branch that forbids it
 from __future__ import annotations
 
 import heapq
-from dataclasses import dataclass
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Callable
 
 from bille.instances.walking import UNREACHABLE
