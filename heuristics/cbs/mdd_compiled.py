@@ -52,13 +52,11 @@ def mdd_run(start, succ, dist, home, cost, stride, at, edges, cells, firsts, min
         q = level[i]
         if home[q] and cost >= min_arrival and cost >= stay_from(q, stride, at, cells):
             keep[cost % 2, q] = cost
-    kept = 0
     for t in range(cost, 0, -1):
         for r in range(first[t], first[t + 1]):
             if keep[t % 2, out[r, 2]] == t:
                 keep[(t - 1) % 2, out[r, 1]] = t - 1
                 out[r, 0] = -out[r, 0]  # kept: marked, read back below
-                kept += 1
     w = 0
     for r in range(n):
         if out[r, 0] < 0:
