@@ -101,3 +101,19 @@ def test_bille_solve_prints_each_rung():
     assert lines[1] == "  +(3,3)(12,3): optimal 56, 12.3 s"
     assert lines[2].endswith(">= 56 (nothing shorter than the best schedule then), 40.0 s")
     assert lines[3] == "  +(3,3)(12,3)(2,3)(13,3)(14,3)(2,1): >= 48 (stopped), 93.2 s"
+
+
+def test_the_ladder_stops_once_the_best_schedule_is_proved_optimal():
+    inst = TINY[0]
+    keep = solve(inst, "bfs", cells="keep", time_limit=60)
+    assert keep.status == "optimal"
+    best = from_schedule(inst, keep.schedule, "keep")
+    asked = []
+
+    def closed():
+        asked.append(1)
+        return len(asked) > 1  # closed after the first rung
+
+    rows = climb(inst, lambda: best, Budget(60), lambda schedule: None, 2_000_000, closed)
+    assert len(rows) == 1 and len(asked) == 2
+    assert climb(inst, lambda: best, Budget(60), lambda schedule: None, 2_000_000, lambda: True) == []

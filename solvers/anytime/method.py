@@ -158,6 +158,7 @@ def _reporter(bracket: Bracket, progress: Callable) -> Callable:
 # state cap
 CLASS_SHARE = 0.25
 CLASS_STATES = 20_000_000
+LADDER_SHARE = 0.6
 
 
 class _Anytime:
@@ -167,6 +168,7 @@ class _Anytime:
                  report, keep_class: bool = True, ladder: bool = True) -> None:
         self.instance, self.bracket, self.slice, self.keep_class = instance, bracket, slice_s, keep_class
         self.ladder = ladder
+        self.rise = None  # the bound search, once started (the ladder reads what it sent: _closed)
         self.parallel, self.bound_solver, self.report = parallel, bound_solver, report
         self.budget, self.total = budget, budget.left()  # the run's, and its seconds (inf: no limit)
         self.cut: list = []  # the first schedule's runs that ran out of their share
@@ -200,6 +202,7 @@ class _Anytime:
                     scaffold = Scaffold(bounds.scaffold, bracket, budget, self.total)
                     self.stats["scaffold"] = scaffold.proved
             self._first(first)
+            self.rise = rise
             self._keep_class()
             rise = rise or Rise(inst, self.bound_solver, bracket, budget)
             seek = _Seek(inst, self.cut, budget, self.total)
@@ -332,7 +335,15 @@ class _Anytime:
                 if found is not None:
                     self.bracket.offer(found)
 
-            self.stats["ladder"] = climb(inst, lambda: self.bracket.best, share, offer, CLASS_STATES)
+            rest = max(0.0, LADDER_SHARE * self.total - (self.budget.now() - began))
+            self.stats["ladder"] = climb(inst, lambda: self.bracket.best, self.budget.child(rest), offer, CLASS_STATES,
+                                         self._closed)
+
+    def _closed(self) -> bool:
+        """Whether the bracket is closed, with the bounds the background bound search has sent."""
+        if isinstance(self.rise, Background):
+            self.rise.step(self.budget.child(0))
+        return self.bracket.closed
 
     def start_from(self, found: Incumbent) -> None:
         """``found`` is the first schedule: ``stats.first`` names it."""
