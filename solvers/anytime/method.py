@@ -99,8 +99,9 @@ class AnytimeOptions(MethodOptions):
     rest of the schedule permuted to match. ``incumbent``: a schedule to start from instead of
     the heuristics' (must be valid). ``keep_class``: the exact joint search among the schedules
     that keep the structure after the first schedule (:meth:`_Anytime._keep_class`); ``ladder``:
-    then, in the rest of that share, the same search over that class widened cell by cell below
-    the best schedule (:mod:`.ladder`; ``stats.ladder`` says what each rung proved)."""
+    then, up to :data:`LADDER_SHARE` of the time limit, the same search over that class widened
+    cell by cell below the best schedule (:mod:`.ladder`; ``stats.ladder`` says what each rung
+    proved)."""
 
     METHOD = "anytime"
     window: int = option(8, at_least=2, help="first window length of the neighbourhood search, in steps")
@@ -117,7 +118,8 @@ class AnytimeOptions(MethodOptions):
                                         help="a valid schedule to start from instead of the heuristics' (--incumbent "
                                              "FILE)")
     keep_class: bool = option(True, help="first decide the class that keeps the structure by the exact joint search")
-    ladder: bool = option(True, help="then widen that class cell by cell below the best schedule, in the same time")
+    ladder: bool = option(True, help="then widen that class cell by cell below the best schedule (up to 75 % of the "
+                                     "time limit)")
 
 
 def plan(instance: Instance, options: AnytimeOptions | None = None, run: Run | None = None, *,
@@ -307,7 +309,8 @@ class _Anytime:
         ``cells=keep``) for up to :data:`CLASS_SHARE` of the time limit: on the load-transfer maps it
         decides that class in seconds, its optimum is offered as a schedule, and the class's
         optimum (or the bound it reached) goes to ``stats.class_optima`` (``stats.class_search``
-        says how it ended); the rest of the share climbs the ladder (:mod:`.ladder`). The class's
+        says how it ended); then, up to :data:`LADDER_SHARE` of the time limit counted from its
+        start, it climbs the ladder (:mod:`.ladder`). The class's
         optimum is no bound on every schedule: the bracket's lower bound is left as it is."""
         inst = self.instance
         if not self.keep_class or not inst.is_reconfiguration or self.budget.expired():
