@@ -82,8 +82,9 @@ def _in_line(cut: np.ndarray, tiles: np.ndarray, w: int, h: int) -> dict[int, in
 def climb(instance: Instance, best, budget: Budget, offer, max_states: int, closed=lambda: False) -> list[dict]:
     """Climb the ladder within ``budget``: each rung searched below ``best()`` (the bracket's best
     schedule, an :class:`~..incumbent.Incumbent`), a shorter schedule handed to ``offer``
-    (a :class:`Schedule`), until ``closed()`` (the best schedule proved optimal). Returns what each rung proved: its cells added, its status, and its
-    optimum (decided) or its bound (stopped)."""
+    (a :class:`Schedule`), until ``closed()`` (the best schedule proved optimal). Returns what
+    each rung proved: its cells added, its status, and its optimum (decided) or its bound
+    (stopped)."""
     from ..bfs import Options, plan as bfs
 
     cells = candidates(instance)
