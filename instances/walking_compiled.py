@@ -10,9 +10,10 @@ from .jit import jit
 
 
 @jit
-def breadth_first(indptr, indices, sources, unreachable):  # pragma: no cover - compiled
+def breadth_first(indptr, indices, sources, unreachable, blocked):  # pragma: no cover - compiled
     """``int32[n]``: fewest edges from any of ``sources`` to each node along the CSR graph
-    (``indptr``, ``indices``); ``unreachable`` where none leads."""
+    (``indptr``, ``indices``), never entering a node where ``blocked`` is True (an empty array:
+    none); ``unreachable`` where none leads."""
     n = indptr.shape[0] - 1
     dist = np.full(n, unreachable, dtype=np.int32)
     queue = np.empty(n, dtype=np.int64)
@@ -28,7 +29,7 @@ def breadth_first(indptr, indices, sources, unreachable):  # pragma: no cover - 
         d = dist[u] + 1
         for k in range(indptr[u], indptr[u + 1]):
             v = indices[k]
-            if dist[v] == unreachable:
+            if dist[v] == unreachable and not (blocked.shape[0] > 0 and blocked[v]):
                 dist[v] = d
                 queue[tail] = v
                 tail += 1

@@ -39,7 +39,7 @@ from __future__ import annotations
 
 from collections import deque
 
-import numpy as np
+from bille.instances.walking import UNREACHABLE
 
 from .constraints import NEVER, VERTEX
 from .lowlevel import MDD, Agent, Path, meets_all
@@ -57,10 +57,15 @@ class Corridors:
         self.caches = caches or ({}, {}, {})
         self._chains, self._dist, self._neighbours = self.caches
 
-    def _graph(self, k: int) -> int:
-        """The walking graph of robot ``k`` (robots of one moveset share one), as a key."""
+    def _walk_of(self, k: int):
+        """The walking graph of robot ``k``: the :class:`~bille.instances.walking.Walk` whose
+        ``moves`` it reads (robots of one moveset share one), or those moves."""
         moves = self.agents[k].moves
-        return id(getattr(moves, "__self__", moves))
+        return getattr(moves, "__self__", moves)
+
+    def _graph(self, k: int) -> int:
+        """The walking graph of robot ``k``, as a key."""
+        return id(self._walk_of(k))
 
     def neighbours(self, k: int, p: int) -> list[int]:
         """The cells robot ``k`` can move to from ``p`` (each once: two actions may go alike);
@@ -107,15 +112,12 @@ class Corridors:
                 self._dist.clear()
             start = agent.start
             if agent.arrays is not None:
-                from .mdd_compiled import walk_from
-
-                blocked = np.zeros(len(agent.dist), np.bool_)
-                blocked[list(avoid)] = True
-                search = self._dist[key] = walk_from(agent.arrays[0], start, blocked, NEVER)
+                search = self._dist[key] = self._walk_of(k).from_pose_avoiding(start, avoid)
             else:
                 search = self._dist[key] = ({start: 0}, deque([start]))
         if not isinstance(search, tuple):
-            return int(search[target])
+            found = int(search[target])
+            return NEVER if found >= UNREACHABLE else found
         seen, queue = search
         while target not in seen and queue:
             p = queue.popleft()

@@ -8,9 +8,11 @@ its place, so it returns the same path (tests/test_cbs_compiled.py compares the 
 constraint sets). Only the bookkeeping differs: nodes are rows of an array, each with its parent
 row, the open list a binary heap of rows, the best row per ``(pose, time)`` an open-addressing
 table, the constraints and the conflict-avoidance table sorted arrays of keys
-(:func:`flat_table`, :class:`.classic.ClassicAvoid`). Its MDD and distances are in
-:mod:`.mdd_compiled` (with :func:`.mdd_compiled.warm_up`); the constraint tree switches to them once its searches in Python have taken
-long (:data:`.search.SWITCH`), or from the start where Numba is loaded already.
+(:func:`flat_table`, :class:`.classic.ClassicAvoid`). Its MDD is in :mod:`.mdd_compiled` (with
+:func:`.mdd_compiled.warm_up`), the corridor split's distances in the walk's compiled search
+(:meth:`bille.instances.walking.Walk.from_pose_avoiding`); the constraint tree switches to them
+once its searches in Python have taken long (:data:`.search.SWITCH`), or from the start where
+Numba is loaded already.
 
 The search runs in slices of :data:`SLICE` expansions, so the caller can look at its budget
 between two; the arrays live in :class:`Scratch` and grow between two slices when full.

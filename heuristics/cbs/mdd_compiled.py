@@ -1,7 +1,6 @@
 """The MDD of :func:`.lowlevel.mdd` for point robots, compiled (the moves of every least-cost
-path, found layer by layer forwards and kept backwards from the goal poses), and the walking
-distances the corridor split asks for (:mod:`.corridor`); tests/test_cbs_compiled.py compares
-both with the Python ones."""
+path, found layer by layer forwards and kept backwards from the goal poses);
+tests/test_cbs_compiled.py compares it with the Python one."""
 from __future__ import annotations
 
 from collections.abc import Sequence
@@ -10,7 +9,7 @@ import numpy as np
 
 from bille.instances.jit import jit
 
-from .constraints import NEVER, Table
+from .constraints import Table
 from .lowlevel import MDD, Agent
 from .lowlevel_compiled import Scratch, allowed, flat_table, search, stay_from
 
@@ -129,30 +128,9 @@ class _Steps(_Lazy):
                      for _, p, q, a in self.rows[self.first[t]:self.first[t + 1]].tolist())
 
 
-@jit
-def walk_from(succ, start, blocked, never):  # pragma: no cover - compiled
-    """Fewest moves from ``start`` to each pose over poses not ``blocked`` (``never`` where none)."""
-    P, A = succ.shape
-    dist = np.full(P, never, np.int64)
-    queue = np.zeros(P, np.int64)
-    dist[start] = 0
-    queue[0] = start
-    head, tail = 0, 1
-    while head < tail:
-        p = queue[head]
-        head += 1
-        for a in range(A):
-            q = succ[p, a]
-            if q >= 0 and dist[q] == never and not blocked[q]:
-                dist[q] = dist[p] + 1
-                queue[tail] = q
-                tail += 1
-    return dist
-
-
 def warm_up() -> None:
     """Load (or compile) the compiled low level now (:mod:`.lowlevel_compiled` and this module):
-    a search, an MDD and a walk on two cells."""
+    a search and an MDD on two cells."""
     succ = np.array([[0, 1], [1, 0]], np.int32)  # wait, and a step to the other cell
 
     def moves(p: int) -> list:
@@ -162,4 +140,3 @@ def warm_up() -> None:
     agent = Agent(0, 0, moves, [1, 0], [False, True], 1, arrays)
     path = search(agent, arrays, Table(()), None, Scratch())
     mdd(agent, arrays, Table(()), path.cost)
-    walk_from(succ, 0, np.zeros(2, np.bool_), NEVER)
