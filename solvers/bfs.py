@@ -63,7 +63,12 @@ class Options(MethodOptions):
     incumbent is given (its pruning works forward). ``deepen``: where no incumbent is given and the
     search has not decided in a share of the time limit (:data:`PLAIN_SHARE`), search below a
     rising bound with the rest (:func:`.joint.search.deepen`): that decides classes whose bound is
-    close to their optimum (short schedules of several robots) and slows the others down."""
+    close to their optimum (short schedules of several robots) and slows the others down.
+    ``abstraction``: for ``keep`` and ``no-scaffold`` (widened or not), the exact distances of a
+    coarser world where each group of cells keeps only its count of tiles
+    (:mod:`.joint.abstraction`), built once where it fits; they cut the search below an incumbent
+    and, without one, it deepens from their bound at the start (the direction ``both``, asked
+    for, goes without them)."""
 
     METHOD = "bfs"
     cells: str = option("all", choices=KINDS,
@@ -82,6 +87,8 @@ class Options(MethodOptions):
     direction: str = option("auto", choices=("auto", "forward", "both"),
                             help="forward, both (also back from the goal states) or auto (both where they can be "
                                  "listed)")
+    abstraction: bool = option(True, help="keep and no-scaffold classes: guide the search by an abstraction's exact "
+                                          "distances (robots exact, tiles counted per group of cells), where it fits")
     deepen: bool = option(False, help="without an incumbent, when the plain search has not decided in 5 % of the time "
                                       "limit (at least 5 s): search below a rising bound with the rest")
 
@@ -127,15 +134,33 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
             raise OptionError(f"bfs: the incumbent is no valid schedule: {report.violation}")
         upper = report.metrics.makespan
     direction = _direction(options, upper)
-    tables = compile_tables(instance, cells, distances=upper is not None)  # the bounds serve the pruning only
+    # the abstraction guides a forward search of a class below an incumbent, or deepening from its bound
+    guided = options.abstraction and options.max_steps is None and (upper is not None or options.direction != "both")
+    tables = compile_tables(instance, cells, distances=upper is not None or guided)  # the bounds serve the pruning
     per = bytes_per_state(tables)
     room = min(memory_budget(), address_room())
+    built = None
+    if guided:
+        from .joint.abstraction import attach
+
+        tables, built = attach(instance, cells, tables, budget, room)
+        room -= 0 if built is None else built["states"]
     cap = int(room // per)
     max_states = options.max_states or cap
     if max_states > cap:
         raise OptionError(f"bfs: max_states {max_states:,} needs about {human(max_states * per)}, more than the "
                           f"{human(room)} this machine allows (BILLE_MEMORY_GIB sets it)")
     deepening = options.deepen and upper is None and options.max_steps is None
+    if built is not None and upper is None:  # no schedule of the class is shorter than its bound
+        from .joint.compiled import UNREACHED
+        from .joint.search import deepen
+
+        out = deepen(instance, cells, budget, proved=min(int(built["start"]), UNREACHED), max_states=max_states,
+                     events=run.events, tables=tables)
+        result = _result(instance, cells, out, upper, incumbent, options, budget, built)
+        if result.schedule is not None:
+            run.events.schedule(result.schedule)
+        return result
     out = search(instance, cells, _plain_share(budget) if deepening else budget, U=upper, max_states=max_states,
                  max_steps=options.max_steps, events=run.events, tables=tables, direction=direction)
     if deepening and out.stop == "time" and not budget.expired():  # its share spent, not the whole limit
@@ -143,7 +168,7 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
 
         out = deepen(instance, cells, budget, proved=int(out.proved), max_states=max_states, events=run.events,
                      tables=compile_tables(instance, cells, distances=True))  # keeps the better proof
-    result = _result(instance, cells, out, upper, incumbent, options, budget)
+    result = _result(instance, cells, out, upper, incumbent, options, budget, built)
     if result.schedule is not None:
         run.events.schedule(result.schedule)
     return result
@@ -166,9 +191,11 @@ def _direction(options: Options, upper: int | None) -> str:
     return "forward" if upper is not None else "both"
 
 
-def _result(instance: Instance, cells: Cells, out, upper, incumbent, options: Options, budget) -> Result:
+def _result(instance: Instance, cells: Cells, out, upper, incumbent, options: Options, budget, built) -> Result:
     """The search's outcome as a result whose claim names its class (module docstring)."""
     stats = {**out.stats(), "class": {**cells.to_json(), "lower_bound": None}}
+    if built is not None:
+        stats["abstraction"] = built
     whole = cells.unconditional
     schedule, status, proved, failure = None, None, out.proved, None
     if out.stop == "goal":

@@ -286,8 +286,9 @@ def test_deepening_finds_the_optimum_of_each_class():
 
 
 def test_a_search_that_does_not_decide_in_its_share_deepens(monkeypatch):
-    """Asked to deepen, the plain search gets a share of the time limit (none here: it stops at
-    once), then the search deepens: the same optimum, a valid schedule."""
+    """Asked to deepen, without the abstraction (which deepens from its own bound), the plain
+    search gets a share of the time limit (none here: it stops at once), then the search
+    deepens: the same optimum, a valid schedule."""
     from bille.solvers import bfs as bfs_module
 
     monkeypatch.setattr(bfs_module, "PLAIN_SHARE", 0.0)
@@ -298,7 +299,7 @@ def test_a_search_that_does_not_decide_in_its_share_deepens(monkeypatch):
         if plain.status != "optimal" or plain.metrics.makespan < 2:
             continue
         events = []
-        got = plan(inst, Options(engine="compiled", cells="keep", deepen=True),
+        got = plan(inst, Options(engine="compiled", cells="keep", deepen=True, abstraction=False),
                    run=Run(Budget(60.0), Events(on_progress=events.append)))
         report = validate(inst, got.schedule)
         assert got.status == "optimal" and report.valid, inst.name

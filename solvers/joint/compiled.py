@@ -155,3 +155,25 @@ def store(pend, n, links, hs, states, parent, table, counters, touch):  # pragma
         if links[i] & 1:
             return r
     return -1
+
+
+UNREACHED = 255  # the abstraction's distance where no abstract goal is reached
+
+
+@jit
+def abstract_distance(vals, row, nR, gid, local, V, gmask, size, dist):  # pragma: no cover - compiled
+    """The abstract distance of the state with robot values ``vals`` (``pose * 2 + carrying``)
+    and the tiles of the packed ``row`` (:class:`.abstraction.Abstraction`)."""
+    idx = np.int64(0)
+    for i in range(vals.shape[0]):
+        v = vals[i]
+        lp = local[gid[i], v >> 1]
+        if lp < 0:
+            return UNREACHED
+        idx = idx * V[i] + 2 * lp + (v & 1)
+    for j in range(size.shape[0]):
+        c = 0
+        for w in range(gmask.shape[1]):
+            c += popcount(row[nR + w] & gmask[j, w])
+        idx = idx * (size[j] + 1) + c
+    return dist[idx]

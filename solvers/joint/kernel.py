@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .compiled import jit, connected, popcount, store
+from .compiled import abstract_distance, jit, connected, popcount, store
 from .marks import fits, release, unmark
 
 WAIT, MOTION, PICK, PLACE = 0, 1, 2, 3  # bille.instances.moveset.Kind
@@ -66,6 +66,7 @@ def expand(mode, states, parent, table, counters, cursor, hi, work, max_rows, de
            # the instance's tables (.tables.Tables)
            m, rbits, rpw, nR, nT, width, height, classic, gid, succ, coll, carry, carry_ok, need, target, kind,
            bit_of, cell_of, fixed, fixed_count, anchor, goal_words, dist, sym_start, sym_idx, masks, W, reach, fetch,
+           pdb_local, pdb_V, pdb_gmask, pdb_size, pdb_dist,
            # scratch, allocated once by the caller
            tiles, occ, endocc, startocc, tgt, cand, ncand, choice, pose, carrying, after, vals, row, seen, stack,
            stamp, usedw, pend, pgoal, hs, touch,
@@ -280,6 +281,10 @@ def expand(mode, states, parent, table, counters, cursor, hi, work, max_rows, de
                                 best = e
                         if best > h:
                             h = best
+                if pdb_dist.shape[0] > 0 and depth + 1 + h < U:  # the abstraction's distance (.abstraction)
+                    e = abstract_distance(vals, row, nR, gid, pdb_local, pdb_V, pdb_gmask, pdb_size, pdb_dist)
+                    if e > h:
+                        h = e
                 if depth + 1 + h >= U:
                     counters[PRUNED] += 1
                     counters[LEAST_CUT] = min(counters[LEAST_CUT], depth + 1 + h)

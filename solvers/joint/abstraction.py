@@ -1,0 +1,354 @@
+"""A bound on the steps left from any joint state of a class: the exact distances of a coarser
+world, searched backwards once from its goals (a pattern database).
+
+**The abstract world.** Its state keeps each robot's pose and load as they are, and of the tiles
+only how many lie on each *group* of cells: the groups are the 4-connected components of the
+cells the class allows to change, less its pinned cells (:func:`bille.solvers.bounds.classes.pinned`:
+cells that hold a tile at every step of every schedule of the class). Its steps are the joint
+actions of the robots under the rules with three of them relaxed:
+
+- support: a robot may stand on any cell that may hold a tile in the class (the cells allowed
+  to change, and the start's tiles), whether it holds one or not (no other cell ever does);
+- a pick from a group needs a tile on it, a place an empty cell of it: a step picks at most
+  ``count`` tiles from a group and places at most ``size - count`` on it; no pick or place
+  targets a pinned cell or a cell the class does not allow to change;
+- connectivity is not asked for.
+
+The preconditions on the loads, the workspace and the collision sets (rules 1-3) are the exact
+rules', read from the same tables (:mod:`.tables`).
+
+**Why it is a bound.** Map a state of the class to the abstract state with the same poses and
+loads and each group's count of tiles. A step of the class maps to an abstract step: its robots'
+actions are the same, their collision sets the same, every new foot stands on a tile, so on a
+cell that may hold one; a pick takes a tile from a cell of a group (a pinned cell is never
+picked, nor placed on since it always holds a tile; a cell the class keeps never changes), so
+the group held at least as many tiles as the step picks from it, and a place sets a tile on an
+empty cell, one of at most ``size - count``. A goal state maps to an abstract goal (the goal's
+counts, no load, each robot with a goal cell on it). So a schedule of ``k`` steps from a state
+maps to an abstract path of ``k`` steps from its image, and the abstract distance (the fewest
+steps to an abstract goal; infinite where none is reached) is at most the steps left from the
+state: an admissible bound, and consistent, since a step changes the image by one abstract step.
+
+The distances are computed by a breadth-first search backwards from every abstract goal over the
+whole abstract space, stored one byte a state, where the space is small enough (:data:`MAX_SIZE`).
+"""
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+
+from bille.instances import Instance
+from bille.instances.jit import jit
+
+from . import kernel
+from .compiled import UNREACHED, abstract_distance
+from .cells import Cells
+from .tables import Tables
+
+MAX_SIZE = 1_000_000_000  # abstract states (a byte each)
+CHUNK = 1 << 22  # states a call of the compiled layer looks at (the budget is polled between calls)
+
+
+@dataclass(frozen=True, eq=False)
+class Abstraction:
+    """The abstract distances (module docstring) and how a packed state maps to its index.
+
+    ``local[g, p]`` is pose ``p``'s index among the poses of graph ``g`` whose feet may stand
+    (-1 elsewhere), ``V[i]`` twice robot ``i``'s number of them; ``gmask[k, w]`` the bits of group
+    ``k`` in tile word ``w``, ``size[k]`` its cells; ``dist`` one byte per index."""
+
+    local: np.ndarray
+    V: np.ndarray
+    gmask: np.ndarray
+    size: np.ndarray
+    dist: np.ndarray
+
+    def at(self, t: Tables, row: np.ndarray) -> int:
+        """The bound of a packed state (:data:`UNREACHED` where no abstract goal is reached)."""
+        rmask = (1 << t.rbits) - 1
+        vals = np.array([(int(row[i // t.rpw]) >> ((i % t.rpw) * t.rbits)) & rmask for i in range(t.m)], np.int64)
+        return int(abstract_distance(vals, row, t.nR, t.gid, self.local, self.V, self.gmask, self.size, self.dist))
+
+
+def groups(instance: Instance, cells: Cells) -> tuple[np.ndarray, int]:
+    """Each cell's group (-1 for none) and the number of groups (module docstring)."""
+    from bille.instances.grid import components
+    from bille.solvers.bounds.classes import pinned
+
+    possible = instance.start.tiles | cells.mask
+    free = cells.mask & ~pinned(instance, possible)
+    differ = instance.start.tiles ^ instance.goal_tiles
+    out = np.full(free.shape, -1, np.int64)
+    k = 0
+    for part in (free & differ, free & ~differ):
+        labels, n = components(part, instance.width, instance.height)
+        out[part] = labels[part] - 1 + k
+        k += int(n)
+    return out, k
+
+
+def size_of(instance: Instance, cells: Cells, t: Tables) -> int:
+    """The number of abstract states (its distances take a byte each)."""
+    possible = instance.start.tiles | cells.mask
+    group, k = groups(instance, cells)
+    sizes = np.bincount(group[group >= 0], minlength=k)
+    total = int(np.prod(sizes + 1, dtype=np.float64))
+    for i in range(instance.num_robots):
+        graph = instance.world.graphs[i]
+        total *= 2 * int(_standing(graph, possible).sum())
+    return total
+
+
+def _standing(graph, possible: np.ndarray) -> np.ndarray:
+    feet = graph.feet
+    ok = graph.valid & possible[np.maximum(feet[:, 0], 0)]
+    both = feet[:, 1] >= 0
+    ok[both] &= possible[np.maximum(feet[both, 1], 0)]
+    return ok
+
+
+def build(instance: Instance, cells: Cells, t: Tables, budget=None) -> Abstraction | None:
+    """The abstraction of ``cells`` on ``instance`` (module docstring), or None where the rules'
+    collision sets are not bit masks (classic collisions, large grids), a pick or place carries
+    cells, or the space exceeds :data:`MAX_SIZE`. ``budget`` polled between layers: None if it
+    runs out first."""
+    from .tables import reversible
+
+    if t.W == 0 or t.classic or not reversible(t) or size_of(instance, cells, t) > MAX_SIZE:
+        return None
+    possible = instance.start.tiles | cells.mask
+    group, k = groups(instance, cells)
+    G, P, A = t.succ.shape
+    graphs = []
+    for g in instance.world.graphs:
+        if all(h is not g for h in graphs):
+            graphs.append(g)
+    local = np.full((G, P), -1, np.int64)
+    glob = np.full((G, P), -1, np.int64)
+    count = np.zeros(G, np.int64)
+    for g, graph in enumerate(graphs):
+        ids = np.flatnonzero(_standing(graph, possible))
+        local[g, ids] = np.arange(len(ids))
+        glob[g, :len(ids)] = ids
+        count[g] = len(ids)
+    V = np.array([2 * count[t.gid[i]] for i in range(t.m)], np.int64)
+    sizes = np.bincount(group[group >= 0], minlength=k).astype(np.int64)
+    gmask = np.zeros((max(k, 1), t.nT), np.int64)
+    for b, cell in enumerate(t.cell_of):
+        if group[cell] >= 0:
+            gmask[group[cell], b // kernel.TILE_BITS] |= np.int64(1) << np.int64(b % kernel.TILE_BITS)
+    goal_counts = np.array([int(instance.goal_tiles[group == j].sum()) for j in range(k)], np.int64)
+    goal_cell = np.array(instance.goal_cells, np.int64)
+    front = np.full((G, P), -1, np.int64)
+    for g, graph in enumerate(graphs):
+        front[g, :graph.num_poses] = graph.feet[:, 0]
+    # each local pose's steps backwards: the (pose, action) pairs whose step forward reaches it
+    rstart = np.zeros((G, P + 1), np.int64)
+    rp_list, ra_list = [], []
+    for g in range(G):
+        p, a = np.nonzero((t.succ[g] >= 0) & (local[g] >= 0)[:, None])
+        q = t.succ[g, p, a]
+        keep = local[g, q] >= 0
+        p, a, q = p[keep], a[keep], q[keep]
+        order = np.argsort(local[g, q], kind="stable")
+        p, a, q = p[order], a[order], local[g, q[order]]
+        rstart[g, 1:] = np.cumsum(np.bincount(q, minlength=P))[:P]
+        rstart[g] += sum(len(x) for x in rp_list)
+        rp_list.append(p)
+        ra_list.append(a)
+    rp = np.concatenate(rp_list).astype(np.int64) if rp_list else np.zeros(0, np.int64)
+    ra = np.concatenate(ra_list).astype(np.int64) if ra_list else np.zeros(0, np.int64)
+    total = int(np.prod(V)) * int(np.prod(sizes + 1))
+    dist = np.full(total, UNREACHED, np.uint8)
+    mult = np.ones(max(k, 1), np.int64)
+    for j in range(k - 2, -1, -1):
+        mult[j] = mult[j + 1] * (sizes[j + 1] + 1)
+    _goals(dist, t.m, V, t.gid, glob, front, goal_cell, int(np.dot(goal_counts, mult[:k])) if k else 0,
+           int(np.prod(sizes + 1)))
+    for level in range(UNREACHED - 1):
+        grew = False
+        for lo in range(0, total, CHUNK):
+            if budget is not None and budget.expired():
+                return None
+            grew |= _layer(dist, level, lo, min(lo + CHUNK, total), t.m, V, t.gid, glob, local, rstart, rp, ra,
+                           t.kind, t.target, t.carry_ok, t.masks, t.W, group, sizes, mult, k)
+        if not grew:
+            break
+    return Abstraction(local, V, gmask, sizes, dist)
+
+
+@jit
+def _goals(dist, m, V, gid, glob, front, goal_cell, cgoal, NC):  # pragma: no cover - compiled
+    """Every abstract goal at distance 0: no load, each robot with a goal cell on it."""
+    total = np.int64(1)
+    for i in range(m):
+        total *= V[i] // 2
+    for code in range(total):
+        r = code
+        idx = np.int64(0)
+        ok = True
+        for i in range(m - 1, -1, -1):
+            half = V[i] // 2
+            lp = r % half
+            r //= half
+            if goal_cell[i] >= 0 and front[gid[i], glob[gid[i], lp]] != goal_cell[i]:
+                ok = False
+                break
+        if not ok:
+            continue
+        r = code
+        mult = np.int64(1)
+        for i in range(m - 1, -1, -1):
+            half = V[i] // 2
+            idx += (2 * (r % half)) * mult
+            r //= half
+            mult *= V[i]
+        dist[idx * NC + cgoal] = 0
+
+
+@jit
+def _layer(dist, level, lo, hi, m, V, gid, glob, local, rstart, rp, ra, kind, target, carry_ok, masks, W, group, size,
+           mult, k):  # pragma: no cover - compiled
+    """The states one step before those at ``level`` among ``lo:hi`` that have no distance yet get
+    ``level + 1``; whether any did."""
+    NC = np.int64(1)
+    for j in range(k):
+        NC *= size[j] + 1
+    A = kind.shape[1]
+    cv = np.zeros((m, A), np.int64)  # each robot's steps backwards: its value before,
+    cp = np.zeros((m, A), np.int64)  # pose before, action,
+    ca = np.zeros((m, A), np.int64)
+    cc = np.zeros((m, A), np.int64)  # load before,
+    cg = np.zeros((m, A), np.int64)  # group picked (+) or placed on (-): 1 + group, signed
+    nc = np.zeros(m, np.int64)
+    vals = np.zeros(m, np.int64)
+    choice = np.zeros(m, np.int64)
+    usedw = np.zeros((m + 1, max(W, 1)), np.int64)
+    counts = np.zeros(max(k, 1), np.int64)
+    delta_pick = np.zeros(max(k, 1), np.int64)
+    delta_place = np.zeros(max(k, 1), np.int64)
+    rm = np.ones(m, np.int64)
+    for i in range(m - 2, -1, -1):
+        rm[i] = rm[i + 1] * V[i + 1]
+    grew = False
+    for idx in range(lo, hi):
+        if dist[idx] != level:
+            continue
+        cidx = idx % NC
+        r = idx // NC
+        for i in range(m - 1, -1, -1):
+            vals[i] = r % V[i]
+            r //= V[i]
+        for j in range(k):
+            counts[j] = (cidx // mult[j]) % (size[j] + 1)
+        dead = False
+        for i in range(m):
+            g = gid[i]
+            q = vals[i] >> 1
+            c1 = vals[i] & 1
+            n = 0
+            for e in range(rstart[g, q], rstart[g, q + 1]):
+                p = rp[e]
+                a = ra[e]
+                kk = kind[g, a]
+                t = target[g, p, a]
+                if kk == kernel.PICK:
+                    if c1 != 1 or t < 0 or group[t] < 0:
+                        continue
+                    c0 = 0
+                    sg = 1 + group[t]
+                elif kk == kernel.PLACE:
+                    if c1 != 0 or t < 0 or group[t] < 0 or not carry_ok[g, p, a]:
+                        continue
+                    c0 = 1
+                    sg = -(1 + group[t])
+                else:
+                    if c1 == 1 and not carry_ok[g, p, a]:
+                        continue
+                    c0 = c1
+                    sg = 0
+                cv[i, n] = 2 * local[g, p] + c0
+                cp[i, n] = p
+                ca[i, n] = a
+                cc[i, n] = c0
+                cg[i, n] = sg
+                n += 1
+            nc[i] = n
+            if n == 0:
+                dead = True
+        if dead:
+            continue
+        lev = 0
+        choice[0] = -1
+        while lev >= 0:
+            choice[lev] += 1
+            ok = False
+            while choice[lev] < nc[lev]:
+                n = choice[lev]
+                g = gid[lev]
+                ok = True
+                for w in range(W):
+                    if usedw[lev, w] & masks[g, cp[lev, n], ca[lev, n], cc[lev, n], w] != 0:
+                        ok = False
+                        break
+                if ok:
+                    for w in range(W):
+                        usedw[lev + 1, w] = usedw[lev, w] | masks[g, cp[lev, n], ca[lev, n], cc[lev, n], w]
+                    break
+                choice[lev] += 1
+            if not ok:
+                lev -= 1
+                continue
+            if lev < m - 1:
+                lev += 1
+                choice[lev] = -1
+                continue
+            # a joint step backwards: the counts before it
+            for j in range(k):
+                delta_pick[j] = 0
+                delta_place[j] = 0
+            for i in range(m):
+                s = cg[i, choice[i]]
+                if s > 0:
+                    delta_pick[s - 1] += 1
+                elif s < 0:
+                    delta_place[-s - 1] += 1
+            before = np.int64(0)
+            fine = True
+            for j in range(k):
+                b = counts[j] + delta_pick[j] - delta_place[j]
+                if b < 0 or b > size[j] or delta_pick[j] > b or delta_place[j] > size[j] - b:
+                    fine = False
+                    break
+                before += b * mult[j]
+            if not fine:
+                continue
+            prev = np.int64(0)
+            for i in range(m):
+                prev += cv[i, choice[i]] * rm[i]
+            prev = prev * NC + before
+            if dist[prev] == UNREACHED:
+                dist[prev] = level + 1
+                grew = True
+    return grew
+
+
+def attach(instance: Instance, cells: Cells, t: Tables, budget, room: float) -> tuple[Tables, dict | None]:
+    """``t`` with the abstraction's distances, where they serve: a class that keeps some cells
+    (``keep`` and ``no-scaffold``, widened or not; over every cell one group holds all tiles
+    and the bound is weak: bridge-2's is 8 where its optimum is 23), an abstract space of at
+    most :data:`MAX_SIZE` states and half of ``room`` bytes, built within ``budget``. Also what
+    was built (its states, the start's bound, seconds), or None."""
+    if cells.unconditional or t.W == 0 or t.classic:
+        return t, None
+    size = size_of(instance, cells, t)
+    if size > min(MAX_SIZE, room // 2):
+        return t, None
+    began = budget.now()
+    a = build(instance, cells, t, budget)
+    if a is None:
+        return t, None
+    t = dataclasses.replace(t, pdb_local=a.local, pdb_V=a.V, pdb_gmask=a.gmask, pdb_size=a.size, pdb_dist=a.dist)
+    return t, {"states": size, "start": a.at(t, t.pack(instance.start_state)), "s": round(budget.now() - began, 3)}
