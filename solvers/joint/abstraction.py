@@ -167,14 +167,21 @@ def build(instance: Instance, cells: Cells, t: Tables, budget=None) -> Abstracti
         mult[j] = mult[j + 1] * (sizes[j + 1] + 1)
     _goals(dist, t.m, V, t.gid, glob, front, goal_cell, int(np.dot(goal_counts, mult[:k])) if k else 0,
            int(np.prod(sizes + 1)))
+    frontier = np.flatnonzero(dist == 0)
+    out = np.empty(max(CHUNK, t.kind.shape[1] ** t.m), np.int64)
     for level in range(UNREACHED - 1):
-        grew = False
-        for lo in range(0, total, CHUNK):
+        parts, pos, nout = [], 0, 0
+        while pos < len(frontier):
             if budget is not None and budget.expired():
                 return None
-            grew |= _layer(dist, level, lo, min(lo + CHUNK, total), t.m, V, t.gid, glob, local, rstart, rp, ra,
-                           t.kind, t.target, t.carry_ok, t.masks, t.W, group, sizes, mult, k)
-        if not grew:
+            pos, nout = _layer(dist, level, frontier, pos, min(pos + CHUNK, len(frontier)), out, nout, t.m, V, t.gid,
+                               local, rstart, rp, ra, t.kind, t.target, t.carry_ok, t.masks, t.W, group, sizes, mult,
+                               k)
+            if pos < len(frontier) and nout > len(out) // 2:
+                parts.append(out[:nout].copy())
+                nout = 0
+        frontier = np.concatenate(parts + [out[:nout]])
+        if len(frontier) == 0:
             break
     return Abstraction(local, V, gmask, sizes, dist)
 
@@ -209,10 +216,11 @@ def _goals(dist, m, V, gid, glob, front, goal_cell, cgoal, NC):  # pragma: no co
 
 
 @jit
-def _layer(dist, level, lo, hi, m, V, gid, glob, local, rstart, rp, ra, kind, target, carry_ok, masks, W, group, size,
+def _layer(dist, level, frontier, lo, hi, out, nout, m, V, gid, local, rstart, rp, ra, kind, target, carry_ok, masks, W, group, size,
            mult, k):  # pragma: no cover - compiled
-    """The states one step before those at ``level`` among ``lo:hi`` that have no distance yet get
-    ``level + 1``; whether any did."""
+    """The states one step before those of ``frontier[lo:hi]`` (at ``level``) that have no distance
+    yet get ``level + 1`` and are listed in ``out`` from ``nout`` on. Stops before a state whose
+    steps backwards might not fit in ``out``; returns where it stopped and the new ``nout``."""
     NC = np.int64(1)
     for j in range(k):
         NC *= size[j] + 1
@@ -232,10 +240,8 @@ def _layer(dist, level, lo, hi, m, V, gid, glob, local, rstart, rp, ra, kind, ta
     rm = np.ones(m, np.int64)
     for i in range(m - 2, -1, -1):
         rm[i] = rm[i + 1] * V[i + 1]
-    grew = False
-    for idx in range(lo, hi):
-        if dist[idx] != level:
-            continue
+    for e in range(lo, hi):
+        idx = frontier[e]
         cidx = idx % NC
         r = idx // NC
         for i in range(m - 1, -1, -1):
@@ -280,6 +286,11 @@ def _layer(dist, level, lo, hi, m, V, gid, glob, local, rstart, rp, ra, kind, ta
                 dead = True
         if dead:
             continue
+        most = np.int64(1)
+        for i in range(m):
+            most *= nc[i]
+        if nout + most > out.shape[0]:
+            return e, nout
         lev = 0
         choice[0] = -1
         while lev >= 0:
@@ -331,8 +342,9 @@ def _layer(dist, level, lo, hi, m, V, gid, glob, local, rstart, rp, ra, kind, ta
             prev = prev * NC + before
             if dist[prev] == UNREACHED:
                 dist[prev] = level + 1
-                grew = True
-    return grew
+                out[nout] = prev
+                nout += 1
+    return hi, nout
 
 
 def attach(instance: Instance, cells: Cells, t: Tables, budget, room: float) -> tuple[Tables, dict | None]:
