@@ -24,6 +24,7 @@ reference the compiled search is tested against.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from bille.instances import Instance, OptionError
@@ -151,23 +152,23 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
         raise OptionError(f"bfs: max_states {max_states:,} needs about {human(max_states * per)}, more than the "
                           f"{human(room)} this machine allows (BILLE_MEMORY_GIB sets it)")
     deepening = options.deepen and upper is None and options.max_steps is None
-    if built is not None and upper is None:  # no schedule of the class is shorter than its bound
-        from .joint.compiled import UNREACHED
+    if built is not None and built["none"]:  # no abstract goal reached: the class has no schedule
+        from .joint.store import Outcome
+
+        out = Outcome("exhausted", math.inf if upper is None else upper, states=1)
+    elif built is not None:  # no schedule of the class is shorter than its bound: deepen from there
         from .joint.search import deepen
 
-        out = deepen(instance, cells, budget, proved=min(int(built["start"]), UNREACHED), max_states=max_states,
-                     events=run.events, tables=tables)
-        result = _result(instance, cells, out, upper, incumbent, options, budget, built)
-        if result.schedule is not None:
-            run.events.schedule(result.schedule)
-        return result
-    out = search(instance, cells, _plain_share(budget) if deepening else budget, U=upper, max_states=max_states,
-                 max_steps=options.max_steps, events=run.events, tables=tables, direction=direction)
-    if deepening and out.stop == "time" and not budget.expired():  # its share spent, not the whole limit
-        from .joint.search import deepen
+        out = deepen(instance, cells, budget, proved=int(built["start"]), max_states=max_states, events=run.events,
+                     tables=tables, upper=upper)
+    else:
+        out = search(instance, cells, _plain_share(budget) if deepening else budget, U=upper, max_states=max_states,
+                     max_steps=options.max_steps, events=run.events, tables=tables, direction=direction)
+        if deepening and out.stop == "time" and not budget.expired():  # its share spent, not the whole limit
+            from .joint.search import deepen
 
-        out = deepen(instance, cells, budget, proved=int(out.proved), max_states=max_states, events=run.events,
-                     tables=compile_tables(instance, cells, distances=True))  # keeps the better proof
+            out = deepen(instance, cells, budget, proved=int(out.proved), max_states=max_states, events=run.events,
+                         tables=compile_tables(instance, cells, distances=True))  # keeps the better proof
     result = _result(instance, cells, out, upper, incumbent, options, budget, built)
     if result.schedule is not None:
         run.events.schedule(result.schedule)

@@ -64,7 +64,7 @@ def test_every_rung_claims_its_class_optimum(inst):
         offered.append(schedule)
         best.append(from_schedule(inst, schedule, "ladder"))
 
-    rows = climb(inst, lambda: best[-1], Budget(60), offer, 2_000_000)
+    rows = climb(inst, lambda: best[-1], Budget(60), offer, 2_000_000, top=False)
     assert len(rows) == -(-len(candidates(inst)) // RUNG)  # every rung decided on these
     for row in rows:
         plain = solve(inst, "bfs", cells="keep", add_cells=row["add_cells"], time_limit=60)
@@ -74,6 +74,21 @@ def test_every_rung_claims_its_class_optimum(inst):
     for schedule in offered:  # a shorter schedule offered is valid, and shorter than keep's optimum
         checked = solve(inst, "bfs", cells="keep", time_limit=60)
         assert from_schedule(inst, schedule, "x").makespan < checked.metrics.makespan
+
+
+@pytest.mark.parametrize("inst", TINY, ids=lambda inst: inst.name)
+def test_the_top_claims_the_optimum_without_scaffold(inst):
+    """The top of the ladder, searched first: the class without scaffold, its optimum the plain
+    search's (no abstraction, no incumbent); decided, it ends the ladder."""
+    keep = solve(inst, "bfs", cells="keep", time_limit=60)
+    if keep.status != "optimal":
+        pytest.skip("no schedule keeps the structure")
+    best = [from_schedule(inst, keep.schedule, "keep")]
+    rows = climb(inst, lambda: best[-1], Budget(60), lambda s: best.append(from_schedule(inst, s, "top")), 2_000_000)
+    assert rows and rows[0]["cells"] == "no-scaffold" and rows[0]["decided"] and len(rows) == 1
+    plain = solve(inst, "bfs", cells="no-scaffold", abstraction=False, direction="forward", time_limit=60)
+    assert plain.status == "optimal"
+    assert rows[0].get("optimum", rows[0].get("lower_bound")) == plain.metrics.makespan == best[-1].makespan
 
 
 @pytest.mark.slow
@@ -114,6 +129,13 @@ def test_the_ladder_stops_once_the_best_schedule_is_proved_optimal():
         asked.append(1)
         return len(asked) > 1  # closed after the first rung
 
-    rows = climb(inst, lambda: best, Budget(60), lambda schedule: None, 2_000_000, closed)
+    rows = climb(inst, lambda: best, Budget(60), lambda schedule: None, 2_000_000, closed, top=False)
     assert len(rows) == 1 and len(asked) == 2
     assert climb(inst, lambda: best, Budget(60), lambda schedule: None, 2_000_000, lambda: True) == []
+
+
+def test_bille_solve_prints_the_top():
+    from bille.tools.solve_commands import _ladder_lines
+
+    lines = _ladder_lines([{"cells": "no-scaffold", "status": "optimal", "decided": True, "optimum": 54, "s": 19.9}])
+    assert lines[1].startswith("  no-scaffold") and lines[1].endswith(": optimal 54, 19.9 s")

@@ -103,14 +103,15 @@ def _ladder_lines(rows: list[dict]) -> list[str]:
     """anytime's widening ladder (docs/anytime.md): each rung's class and what it proved."""
     lines = ["widening ladder (the class that keeps the structure, and may change the cells listed):"]
     for row in rows:
-        cells = "".join(f"({x},{y})" for x, y in row["add_cells"])
+        cells = "no-scaffold (its top, every cell where the start or the goal has a tile)" \
+            if row.get("cells") == "no-scaffold" else "+" + "".join(f"({x},{y})" for x, y in row["add_cells"])
         if "optimum" in row:
             said = f"optimal {row['optimum']}"
         elif row.get("decided", True):
             said = f">= {row['lower_bound']} (nothing shorter than the best schedule then)"
         else:
             said = f">= {row['lower_bound']} (stopped)"
-        lines.append(f"  +{cells}: {said}, {row['s']:.1f} s")
+        lines.append(f"  {cells}: {said}, {row['s']:.1f} s")
     return lines
 
 

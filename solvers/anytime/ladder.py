@@ -21,6 +21,11 @@ lt-1 the first rung ((3, 3), (12, 3)) holds a 56-step schedule and the second (a
 nearest first to a cell that changes (steps over tiles), as a shorter schedule changes the
 structure around the cells it must change; ties by position. The ladder is a search for shorter
 schedules and a record of what each class proves, not a bound on every schedule.
+
+Where the abstraction of the class without scaffold fits (:mod:`bille.solvers.joint.abstraction`),
+that class, the ladder's top, is searched first: its search deepens from the abstraction's bound
+to the best schedule, which decides it on lt-1 (54) and lt-3 (53) in seconds. Decided, it holds
+every rung's class, so no rung can give a shorter schedule and the ladder ends there.
 """
 from __future__ import annotations
 
@@ -79,16 +84,23 @@ def _in_line(cut: np.ndarray, tiles: np.ndarray, w: int, h: int) -> dict[int, in
     return line
 
 
-def climb(instance: Instance, best, budget: Budget, offer, max_states: int, closed=lambda: False) -> list[dict]:
+def climb(instance: Instance, best, budget: Budget, offer, max_states: int, closed=lambda: False,
+          top: bool = True) -> list[dict]:
     """Climb the ladder within ``budget``: each rung searched below ``best()`` (the bracket's best
     schedule, an :class:`~..incumbent.Incumbent`), a shorter schedule handed to ``offer``
-    (a :class:`Schedule`), until ``closed()`` (the best schedule proved optimal). Returns what
-    each rung proved: its cells added, its status, and its optimum (decided) or its bound
+    (a :class:`Schedule`), until ``closed()`` (the best schedule proved optimal); ``top``: its
+    top first where it fits (module docstring). Returns what each rung proved: its cells added
+    (``cells``: ``no-scaffold`` for the top), its status, and its optimum (decided) or its bound
     (stopped)."""
     from ..bfs import Options, plan as bfs
 
     cells = candidates(instance)
     rows: list[dict] = []
+    row = _top(instance, best, budget, offer, max_states) if top and not closed() else None
+    if row is not None:
+        rows.append(row)
+        if row["decided"]:  # every rung's class is within it: none holds a shorter schedule
+            return rows
     for k in range(RUNG, len(cells) + RUNG, RUNG):
         if budget.expired() or closed():
             break
@@ -98,20 +110,55 @@ def climb(instance: Instance, best, budget: Budget, offer, max_states: int, clos
         schedule = Schedule.from_ids(instance, incumbent.ids, meta={"method": incumbent.method})
         got = bfs(instance, Options(cells="keep", add_cells=added, incumbent=schedule, max_states=max_states),
                   Run(budget.child()))
-        decided = "stopped" not in got.stats  # exhausted below the incumbent, or a shorter schedule found
-        row = {"add_cells": added, "status": got.status, "decided": decided, "states": got.stats.get("states"),
-               "s": round(budget.now() - began, 3)}
-        makespan = None if got.schedule is None else metrics(instance, bind(instance, got.schedule)).makespan
-        if got.status == "optimal":  # the class's optimum: a shorter schedule, or the incumbent (in the class)
-            row["optimum"] = makespan
-        else:  # nothing in the class below the incumbent (outside it), or the bound where it stopped
-            row["lower_bound"] = incumbent.makespan if decided else got.stats["class"]["lower_bound"]
+        row = _row(instance, got, incumbent, budget.now() - began, offer, add_cells=added)
         rows.append(row)
-        if got.status == "optimal" and makespan < incumbent.makespan:
-            offer(got.schedule)
-        if not decided:
+        if not row["decided"]:
             break
     return rows
 
 
-__all__ = ["RUNG", "candidates", "climb"]
+def _row(instance: Instance, got, incumbent, seconds: float, offer, **names) -> dict:
+    """What a rung's search proved (``names``: its class), a shorter schedule handed to ``offer``."""
+    decided = "stopped" not in got.stats  # exhausted below the incumbent, or a shorter schedule found
+    row = {**names, "status": got.status, "decided": decided, "states": got.stats.get("states"), "s": round(seconds, 3)}
+    makespan = None if got.schedule is None else metrics(instance, bind(instance, got.schedule)).makespan
+    if got.status == "optimal":  # the class's optimum: a shorter schedule, or the incumbent (in the class)
+        row["optimum"] = makespan
+    else:  # nothing in the class below the incumbent (outside it), or the bound where it stopped
+        row["lower_bound"] = incumbent.makespan if decided else got.stats["class"]["lower_bound"]
+    if got.status == "optimal" and makespan < incumbent.makespan:
+        offer(got.schedule)
+    return row
+
+
+def _top(instance: Instance, best, budget: Budget, offer, max_states: int) -> dict | None:
+    """The top of the ladder first, where the abstraction of its class fits
+    (:mod:`bille.solvers.joint.abstraction`): the schedules without scaffold, searched below the
+    best schedule. What it proved, as a rung's row (``cells``: ``no-scaffold``), or None."""
+    from ..bfs import Options, plan as bfs
+    from ..joint.abstraction import MAX_SIZE, size_of
+    from ..joint.cells import cells_of
+
+    if budget.expired() or size_of(instance, cells_of(instance, "no-scaffold")) > MAX_SIZE:
+        return None
+    incumbent = best()
+    began = budget.now()
+    schedule = Schedule.from_ids(instance, incumbent.ids, meta={"method": incumbent.method})
+    got = bfs(instance, Options(cells="no-scaffold", incumbent=schedule, max_states=max_states), Run(budget.child()))
+    if "abstraction" not in got.stats:  # not built in the time or the memory left: nothing searched to speak of
+        return None
+    return _row(instance, got, incumbent, budget.now() - began, offer, cells="no-scaffold")
+
+
+def top_class(rows: list[dict]) -> dict:
+    """What the top's row proved of the class without scaffold: ``{"class_optima": optimum}``,
+    or ``{"class_lower_bounds": bound}``, or nothing (no top searched)."""
+    for row in rows:
+        if row.get("cells") == "no-scaffold":
+            if "optimum" in row:
+                return {"class_optima": row["optimum"]}
+            return {} if row.get("lower_bound") is None else {"class_lower_bounds": row["lower_bound"]}
+    return {}
+
+
+__all__ = ["RUNG", "candidates", "climb", "top_class"]

@@ -310,8 +310,9 @@ class _Anytime:
         decides that class in seconds, its optimum is offered as a schedule, and the class's
         optimum (or the bound it reached) goes to ``stats.class_optima`` (``stats.class_search``
         says how it ended); then, up to :data:`LADDER_SHARE` of the time limit counted from its
-        start, it climbs the ladder (:mod:`.ladder`). The class's
-        optimum is no bound on every schedule: the bracket's lower bound is left as it is."""
+        start, it climbs the ladder (:mod:`.ladder`), whose top (the schedules without scaffold)
+        gives that class's optimum or bound too. A class's optimum is no bound on every schedule:
+        the bracket's lower bound is left as it is."""
         inst = self.instance
         if not self.keep_class or not inst.is_reconfiguration or self.budget.expired():
             return
@@ -333,7 +334,7 @@ class _Anytime:
             elif found is not None:
                 self.bracket.offer(found)
         if self.ladder and got.status == "optimal" and self.bracket.best is not None:
-            from .ladder import climb
+            from .ladder import climb, top_class
 
             def offer(schedule: Schedule) -> None:
                 found = from_schedule(inst, schedule, "bfs (ladder)")
@@ -343,6 +344,8 @@ class _Anytime:
             rest = max(0.0, LADDER_SHARE * self.total - (self.budget.now() - began))
             self.stats["ladder"] = climb(inst, lambda: self.bracket.best, self.budget.child(rest), offer, CLASS_STATES,
                                          self._closed)
+            for key, value in top_class(self.stats["ladder"]).items():  # the schedules without scaffold
+                self.stats.setdefault(key, {})["no-scaffold"] = value
 
     def _closed(self) -> bool:
         """Whether the bracket is closed, with the bounds the background bound search has sent."""

@@ -29,8 +29,13 @@ maps to an abstract path of ``k`` steps from its image, and the abstract distanc
 steps to an abstract goal; infinite where none is reached) is at most the steps left from the
 state: an admissible bound, and consistent, since a step changes the image by one abstract step.
 
-The distances are computed by a breadth-first search backwards from every abstract goal over the
-whole abstract space, stored one byte a state, where the space is small enough (:data:`MAX_SIZE`).
+The distances are computed by a breadth-first search backwards from every abstract goal, stored
+one byte a state of the whole abstract space, where it is small enough (:data:`MAX_SIZE`).
+
+**Interchangeable robots** (one moveset, no goal cell: the search's symmetry groups) are alike in
+the abstract world too, so a state's distance is that of the state with their values sorted;
+only sorted states are stored and looked up (the search backwards from a sorted state reaches
+every state one step before it or before any of its permutations, up to sorting).
 """
 from __future__ import annotations
 
@@ -47,7 +52,7 @@ from .compiled import UNREACHED, abstract_distance
 from .cells import Cells
 from .tables import Tables
 
-MAX_SIZE = 1_000_000_000  # abstract states (a byte each)
+MAX_SIZE = 2_000_000_000  # abstract states (a byte each)
 CHUNK = 1 << 22  # states a call of the compiled layer looks at (the budget is polled between calls)
 
 
@@ -57,18 +62,25 @@ class Abstraction:
 
     ``local[g, p]`` is pose ``p``'s index among the poses of graph ``g`` whose feet may stand
     (-1 elsewhere), ``V[i]`` twice robot ``i``'s number of them; ``gmask[k, w]`` the bits of group
-    ``k`` in tile word ``w``, ``size[k]`` its cells; ``dist`` one byte per index."""
+    ``k`` in tile word ``w``, ``size[k]`` its cells; ``dist`` one byte per index: :data:`UNREACHED` where no abstract goal is reached when
+    ``complete``, else where none is reached in 254 steps (a bound all the same)."""
 
     local: np.ndarray
     V: np.ndarray
     gmask: np.ndarray
     size: np.ndarray
     dist: np.ndarray
+    complete: bool = True  # every abstract state that reaches a goal has its distance (none beyond 254)
 
     def at(self, t: Tables, row: np.ndarray) -> int:
         """The bound of a packed state (:data:`UNREACHED` where no abstract goal is reached)."""
         rmask = (1 << t.rbits) - 1
-        vals = np.array([(int(row[i // t.rpw]) >> ((i % t.rpw) * t.rbits)) & rmask for i in range(t.m)], np.int64)
+        vals = [(int(row[i // t.rpw]) >> ((i % t.rpw) * t.rbits)) & rmask for i in range(t.m)]
+        for s in range(len(t.sym_start) - 1):  # interchangeable robots sorted, as stored
+            idx = t.sym_idx[t.sym_start[s]:t.sym_start[s + 1]]
+            for i, v in zip(idx, sorted(vals[i] for i in idx)):
+                vals[i] = v
+        vals = np.array(vals, np.int64)
         return int(abstract_distance(vals, row, t.nR, t.gid, self.local, self.V, self.gmask, self.size, self.dist))
 
 
@@ -89,7 +101,7 @@ def groups(instance: Instance, cells: Cells) -> tuple[np.ndarray, int]:
     return out, k
 
 
-def size_of(instance: Instance, cells: Cells, t: Tables) -> int:
+def size_of(instance: Instance, cells: Cells) -> int:
     """The number of abstract states (its distances take a byte each)."""
     possible = instance.start.tiles | cells.mask
     group, k = groups(instance, cells)
@@ -116,7 +128,7 @@ def build(instance: Instance, cells: Cells, t: Tables, budget=None) -> Abstracti
     runs out first."""
     from .tables import reversible
 
-    if t.W == 0 or t.classic or not reversible(t) or size_of(instance, cells, t) > MAX_SIZE:
+    if t.W == 0 or t.classic or not reversible(t) or size_of(instance, cells) > MAX_SIZE:
         return None
     possible = instance.start.tiles | cells.mask
     group, k = groups(instance, cells)
@@ -174,16 +186,16 @@ def build(instance: Instance, cells: Cells, t: Tables, budget=None) -> Abstracti
         while pos < len(frontier):
             if budget is not None and budget.expired():
                 return None
-            pos, nout = _layer(dist, level, frontier, pos, min(pos + CHUNK, len(frontier)), out, nout, t.m, V, t.gid,
-                               local, rstart, rp, ra, t.kind, t.target, t.carry_ok, t.masks, t.W, group, sizes, mult,
-                               k)
-            if pos < len(frontier) and nout > len(out) // 2:
+            hi = min(pos + CHUNK, len(frontier))
+            pos, nout = _layer(dist, level, frontier, pos, hi, out, nout, t.m, V, t.gid, local, rstart, rp, ra, t.kind,
+                               t.target, t.carry_ok, t.masks, t.W, group, sizes, mult, k, t.sym_start, t.sym_idx)
+            if pos < hi:  # out is full (it holds the steps backwards of any one state)
                 parts.append(out[:nout].copy())
                 nout = 0
         frontier = np.concatenate(parts + [out[:nout]])
         if len(frontier) == 0:
-            break
-    return Abstraction(local, V, gmask, sizes, dist)
+            return Abstraction(local, V, gmask, sizes, dist)
+    return Abstraction(local, V, gmask, sizes, dist, complete=False)
 
 
 @jit
@@ -216,8 +228,8 @@ def _goals(dist, m, V, gid, glob, front, goal_cell, cgoal, NC):  # pragma: no co
 
 
 @jit
-def _layer(dist, level, frontier, lo, hi, out, nout, m, V, gid, local, rstart, rp, ra, kind, target, carry_ok, masks, W, group, size,
-           mult, k):  # pragma: no cover - compiled
+def _layer(dist, level, frontier, lo, hi, out, nout, m, V, gid, local, rstart, rp, ra, kind, target, carry_ok, masks,
+           W, group, size, mult, k, sym_start, sym_idx):  # pragma: no cover - compiled
     """The states one step before those of ``frontier[lo:hi]`` (at ``level``) that have no distance
     yet get ``level + 1`` and are listed in ``out`` from ``nout`` on. Stops before a state whose
     steps backwards might not fit in ``out``; returns where it stopped and the new ``nout``."""
@@ -232,6 +244,7 @@ def _layer(dist, level, frontier, lo, hi, out, nout, m, V, gid, local, rstart, r
     cg = np.zeros((m, A), np.int64)  # group picked (+) or placed on (-): 1 + group, signed
     nc = np.zeros(m, np.int64)
     vals = np.zeros(m, np.int64)
+    before_vals = np.zeros(m, np.int64)
     choice = np.zeros(m, np.int64)
     usedw = np.zeros((m + 1, max(W, 1)), np.int64)
     counts = np.zeros(max(k, 1), np.int64)
@@ -336,9 +349,22 @@ def _layer(dist, level, frontier, lo, hi, out, nout, m, V, gid, local, rstart, r
                 before += b * mult[j]
             if not fine:
                 continue
+            for i in range(m):
+                before_vals[i] = cv[i, choice[i]]
+            for s in range(sym_start.shape[0] - 1):  # interchangeable robots sorted (module docstring)
+                for x in range(sym_start[s] + 1, sym_start[s + 1]):
+                    for y in range(x, sym_start[s], -1):
+                        ia = sym_idx[y - 1]
+                        ib = sym_idx[y]
+                        if before_vals[ia] > before_vals[ib]:
+                            tmp = before_vals[ia]
+                            before_vals[ia] = before_vals[ib]
+                            before_vals[ib] = tmp
+                        else:
+                            break
             prev = np.int64(0)
             for i in range(m):
-                prev += cv[i, choice[i]] * rm[i]
+                prev += before_vals[i] * rm[i]
             prev = prev * NC + before
             if dist[prev] == UNREACHED:
                 dist[prev] = level + 1
@@ -352,10 +378,11 @@ def attach(instance: Instance, cells: Cells, t: Tables, budget, room: float) -> 
     (``keep`` and ``no-scaffold``, widened or not; over every cell one group holds all tiles
     and the bound is weak: bridge-2's is 8 where its optimum is 23), an abstract space of at
     most :data:`MAX_SIZE` states and half of ``room`` bytes, built within ``budget``. Also what
-    was built (its states, the start's bound, seconds), or None."""
+    was built (its states, the start's bound, whether it proves that the class has no schedule:
+    no abstract goal reached from the start, seconds), or None."""
     if cells.unconditional or t.W == 0 or t.classic:
         return t, None
-    size = size_of(instance, cells, t)
+    size = size_of(instance, cells)
     if size > min(MAX_SIZE, room // 2):
         return t, None
     began = budget.now()
@@ -363,4 +390,6 @@ def attach(instance: Instance, cells: Cells, t: Tables, budget, room: float) -> 
     if a is None:
         return t, None
     t = dataclasses.replace(t, pdb_local=a.local, pdb_V=a.V, pdb_gmask=a.gmask, pdb_size=a.size, pdb_dist=a.dist)
-    return t, {"states": size, "start": a.at(t, t.pack(instance.start_state)), "s": round(budget.now() - began, 3)}
+    start = a.at(t, t.pack(instance.start_state))
+    return t, {"states": size, "start": start, "none": start == UNREACHED and a.complete,
+               "s": round(budget.now() - began, 3)}

@@ -281,10 +281,6 @@ def expand(mode, states, parent, table, counters, cursor, hi, work, max_rows, de
                                 best = e
                         if best > h:
                             h = best
-                if pdb_dist.shape[0] > 0 and depth + 1 + h < U:  # the abstraction's distance (.abstraction)
-                    e = abstract_distance(vals, row, nR, gid, pdb_local, pdb_V, pdb_gmask, pdb_size, pdb_dist)
-                    if e > h:
-                        h = e
                 if depth + 1 + h >= U:
                     counters[PRUNED] += 1
                     counters[LEAST_CUT] = min(counters[LEAST_CUT], depth + 1 + h)
@@ -301,6 +297,12 @@ def expand(mode, states, parent, table, counters, cursor, hi, work, max_rows, de
                             vals[ib] = tmp
                         else:
                             break
+            if big and pdb_dist.shape[0] > 0:  # the abstraction's distance, of the sorted values (.abstraction)
+                e = abstract_distance(vals, row, nR, gid, pdb_local, pdb_V, pdb_gmask, pdb_size, pdb_dist)
+                if depth + 1 + e >= U:
+                    counters[PRUNED] += 1
+                    counters[LEAST_CUT] = min(counters[LEAST_CUT], depth + 1 + e)
+                    continue
             for i in range(m):
                 row[i // rpw] |= vals[i] << np.int64((i % rpw) * rbits)
             if mode == FIND:

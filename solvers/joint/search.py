@@ -131,27 +131,33 @@ def search(instance: Instance, cells: Cells, budget: Budget, *, U: int | None = 
 
 
 def deepen(instance: Instance, cells: Cells, budget: Budget, *, proved: int, max_states: int,
-           events: Events | None = None, tables: Tables) -> Outcome:
+           events: Events | None = None, tables: Tables, upper: int | None = None) -> Outcome:
     """The search below a rising bound (module docstring, "Deepening"), from ``proved`` (no
-    schedule of the class is shorter: the plain search's proof). ``tables`` with the distances.
-    The outcome as :func:`search`'s; a stopped run proves at least ``proved``."""
-    U = proved + 1
+    schedule of the class is shorter: the plain search's proof, or the abstraction's bound at the
+    start). ``tables`` with the distances. ``upper``: a schedule of that makespan is known, so the
+    bound rises to it at most, and a run below it exhausted proves nothing in the class shorter
+    (the outcome of :func:`search` below ``upper``). The outcome as :func:`search`'s; a stopped
+    run proves at least ``proved``."""
+    def below(proved: int) -> int:
+        return proved + 1 if upper is None else min(proved + 1, int(upper))
+
+    U = below(proved)
     states = 0
     while True:
         out = search(instance, cells, budget, U=U, max_states=max_states, events=events, tables=tables)
         states += out.states
-        if out.stop != "exhausted":
+        if out.stop != "exhausted" or (upper is not None and U >= upper):
             out.proved = max(out.proved, proved)
             out.states = states
             return out
         if out.least_cut >= NO_BOUND:  # nothing cut: every state of the class was searched
-            out.proved, out.states = math.inf, states
+            out.proved, out.states = (math.inf if upper is None else int(upper)), states
             return out
         proved = int(out.least_cut)
         if events is not None:
-            events.progress({"class": cells.key, "lower": proved, "best": None, "deepening": U,
+            events.progress({"class": cells.key, "lower": proved, "best": upper, "deepening": U,
                              "elapsed": budget.elapsed()})
-        U = proved + 1
+        U = below(proved)
 
 
 def _ended(out: Outcome, stop: str, proved, depth: int, counters: np.ndarray) -> Outcome:
