@@ -48,7 +48,7 @@ from bille.instances import Instance
 from bille.instances.jit import jit
 
 from . import kernel
-from .compiled import UNREACHED, abstract_distance
+from .compiled import UNREACHED, abstract_distance, sort_groups
 from .cells import Cells
 from .tables import Tables
 
@@ -351,17 +351,7 @@ def _layer(dist, level, frontier, lo, hi, out, nout, m, V, gid, local, rstart, r
                 continue
             for i in range(m):
                 before_vals[i] = cv[i, choice[i]]
-            for s in range(sym_start.shape[0] - 1):  # interchangeable robots sorted (module docstring)
-                for x in range(sym_start[s] + 1, sym_start[s + 1]):
-                    for y in range(x, sym_start[s], -1):
-                        ia = sym_idx[y - 1]
-                        ib = sym_idx[y]
-                        if before_vals[ia] > before_vals[ib]:
-                            tmp = before_vals[ia]
-                            before_vals[ia] = before_vals[ib]
-                            before_vals[ib] = tmp
-                        else:
-                            break
+            sort_groups(before_vals, sym_start, sym_idx)  # interchangeable robots sorted (module docstring)
             prev = np.int64(0)
             for i in range(m):
                 prev += before_vals[i] * rm[i]

@@ -157,6 +157,22 @@ def store(pend, n, links, hs, states, parent, table, counters, touch):  # pragma
     return -1
 
 
+@jit
+def sort_groups(vals, sym_start, sym_idx):  # pragma: no cover - compiled
+    """The values of each group of interchangeable robots put in sorted order, in place."""
+    for s in range(sym_start.shape[0] - 1):
+        for x in range(sym_start[s] + 1, sym_start[s + 1]):
+            for y in range(x, sym_start[s], -1):
+                ia = sym_idx[y - 1]
+                ib = sym_idx[y]
+                if vals[ia] > vals[ib]:
+                    tmp = vals[ia]
+                    vals[ia] = vals[ib]
+                    vals[ib] = tmp
+                else:
+                    break
+
+
 UNREACHED = 255  # the abstraction's distance where no abstract goal is reached
 
 

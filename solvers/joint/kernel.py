@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .compiled import abstract_distance, jit, connected, popcount, store
+from .compiled import abstract_distance, jit, connected, popcount, sort_groups, store
 from .marks import fits, release, unmark
 
 WAIT, MOTION, PICK, PLACE = 0, 1, 2, 3  # bille.instances.moveset.Kind
@@ -285,18 +285,7 @@ def expand(mode, states, parent, table, counters, cursor, hi, work, max_rows, de
                     counters[PRUNED] += 1
                     counters[LEAST_CUT] = min(counters[LEAST_CUT], depth + 1 + h)
                     continue
-            # the robots of a symmetry group in sorted order (raw order kept in vals for FIND)
-            for s in range(sym_start.shape[0] - 1):
-                for x in range(sym_start[s] + 1, sym_start[s + 1]):
-                    for y in range(x, sym_start[s], -1):
-                        ia = sym_idx[y - 1]
-                        ib = sym_idx[y]
-                        if vals[ia] > vals[ib]:
-                            tmp = vals[ia]
-                            vals[ia] = vals[ib]
-                            vals[ib] = tmp
-                        else:
-                            break
+            sort_groups(vals, sym_start, sym_idx)  # the robots of a symmetry group in sorted order
             if big and pdb_dist.shape[0] > 0:  # the abstraction's distance, of the sorted values (.abstraction)
                 e = abstract_distance(vals, row, nR, gid, pdb_local, pdb_V, pdb_gmask, pdb_size, pdb_dist)
                 if depth + 1 + e >= U:
