@@ -135,3 +135,34 @@ def test_an_unreachable_index_is_the_largest_bound():
     t, built = guided_tables(inst, "keep")
     assert built is not None and t.pdb_dist.dtype == np.uint8
     assert (t.pdb_dist <= UNREACHED).all() and int(t.pdb_dist.min()) == 0
+
+
+def brute_force_agrees(instances, states: int) -> int:
+    """The guided search's class optima against the brute force over the tiles' configurations
+    (tests/refsearch.py: the classes defined again, independently)."""
+    from refsearch import class_optimum
+
+    agreed = 0
+    for inst in instances:
+        for kind in ("keep", "no-scaffold"):
+            try:
+                best, _ = class_optimum(inst, KEYS[kind], max_states=states)
+            except RuntimeError:  # too many states for the brute force
+                continue
+            got = bfs(inst, cells=kind)
+            if best is None:
+                assert got.status == "unsolved", (inst.name, kind)
+            else:
+                assert got.status == "optimal" and got.metrics.makespan == best, (inst.name, kind)
+                assert validate(inst, got.schedule).valid
+            agreed += 1
+    return agreed
+
+
+def test_guided_optima_equal_the_brute_force():
+    assert brute_force_agrees(tiny_instances(16, first_seed=10_000, max_robots=2) + bridges(6), 5_000) >= 30
+
+
+@pytest.mark.slow
+def test_guided_optima_equal_the_brute_force_on_many():
+    assert brute_force_agrees(tiny_instances(90, first_seed=20_000) + bridges(40), 10_000) >= 150

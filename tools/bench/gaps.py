@@ -14,11 +14,11 @@ class of schedules (:mod:`bille.solvers.bounds.classes`: ``no-scaffold``, ``keep
 gap within the narrowest of them: never a certified gap, since a schedule outside the class may
 be shorter.
 
-With ``class_exact`` seconds, the exact search restricted to the schedules without scaffold
-(``cpsat -O no_scaffold=true``) runs after anytime, capped one step below anytime's schedule when
-that schedule is one of the class: it finds a shorter schedule of the class, or proves that none
-is shorter (anytime's is then optimal within the class), or raises the class bound as far as it
-decides horizons. The row gets the class bound it proved (``N exact``), the makespan of the best
+With ``class_exact`` seconds, the exact joint search of the schedules without scaffold
+(``bfs -O cells=no-scaffold``, guided by its abstraction where it fits) runs after anytime, below
+anytime's schedule when that schedule is one of the class: it finds a shorter schedule of the
+class, or proves that none is shorter (anytime's is then optimal within the class), or raises
+the class bound as far as it got. The row gets the class bound it proved (``N exact``), the makespan of the best
 schedule of the class either search found (``N best``) and the gap between the two (``N gap``):
 which side of the class gap is open, measured.
 """
@@ -49,7 +49,8 @@ def row(arg: str, time_limit: float, class_exact: float | None = None) -> dict:
                 kept=stats.get("kept_windows", {}).get("shortened", 0), time_s=round(result.time_s, 1),
                 class_bounds={k: v.get("lower_bound") for k, v in stats.get("class_bounds", {}).items()},
                 classes=stats.get("classes"), exact=_class_exact(inst, result, class_exact) if class_exact else None,
-                keep_optimum=stats.get("class_optima", {}).get("keep-structure"))
+                keep_optimum=stats.get("class_optima", {}).get("keep-structure"),
+                free_optimum=stats.get("class_optima", {}).get("no-scaffold"))
 
 
 def _class_exact(inst, anytime, seconds: float) -> dict | None:
@@ -64,9 +65,9 @@ def _class_exact(inst, anytime, seconds: float) -> dict | None:
         "classes", ()) else None
     if own is not None and own <= bound:
         return {"lower": bound, "best": own, "optimal": True, "time_s": 0.0}
-    exact = solved(solve(inst, "cpsat", no_scaffold=True, time_limit=seconds,
-                         max_makespan=None if own is None else own - 1))
-    lower = max(bound, exact.claim.lower or 0)
+    incumbent = anytime.schedule if own is not None else None
+    exact = solved(solve(inst, "bfs", cells="no-scaffold", incumbent=incumbent, time_limit=seconds))
+    lower = max(bound, exact.stats["class"]["lower_bound"] or 0)
     found = [m for m in (own, exact.metrics.makespan if exact.schedule is not None else None) if m is not None]
     best = min(found, default=None)
     return {"lower": lower, "best": best, "optimal": best is not None and best <= lower,
@@ -94,7 +95,7 @@ def table(rows: list[dict]) -> list[str]:
     short = {c.key: c.key[0].upper() for c in CLASSES}
     exact = any(r.get("exact") is not None for r in rows)
     columns = ["instance", "static (part)", "LB", "by", "at s", "makespan", "at s", "first", "free", "kept",
-               "gap"] + [f"LB {short[c.key]}" for c in CLASSES] + ["K opt", "in", "class gap", "status"] + (
+               "gap"] + [f"LB {short[c.key]}" for c in CLASSES] + ["K opt", "N opt", "in", "class gap", "status"] + (
         ["N exact", "N best", "N gap", "exact s"] if exact else [])
     body = []
     for r in rows:
@@ -105,16 +106,18 @@ def table(rows: list[dict]) -> list[str]:
         shown = None if r.get("classes") is None else "".join(short[k] for k in r["classes"]) or "-"
         body.append([r["instance"], f"{r['static']} ({r['static_part']})", r["lower"], r["lower_by"], r["lower_s"],
                      r["makespan"], r["best_s"], first, r["free"], r["kept"], _gap(r["makespan"], r["lower"])]
-                    + [bounds.get(c.key) for c in CLASSES] + [r.get("keep_optimum"), shown, within, r["status"]]
+                    + [bounds.get(c.key) for c in CLASSES] + [r.get("keep_optimum"), r.get("free_optimum"), shown, within,
+                                                                 r["status"]]
                     + (_exact_cells(r.get("exact")) if exact else []))
     legend = ", ".join(f"{short[c.key]} {c.name}" for c in CLASSES)
     notes = [f"classes of schedules: {legend}; 'in': those the schedule belongs to; 'class gap': within the "
              "narrowest of them (not a certified gap); 'K opt': the optimum of the schedules that keep the "
-             "structure, decided by anytime's joint search (bille solve -m bfs -O cells=keep)"]
+             "structure, decided by anytime's joint search (bille solve -m bfs -O cells=keep); 'N opt': the optimum of "
+             "the schedules without scaffold, decided by its ladder's top (bille solve -m bfs -O cells=no-scaffold)"]
     if exact:
         notes.append("'N exact': the bound for schedules without scaffold with the exact search restricted to them; "
                      "'N best': the shortest such schedule found; 'N gap': between the two ('optimal' where they meet)")
-    return text_table(columns, body, right={"LB", "at s", "makespan", "free", "kept", "gap", "class gap", "K opt", "N exact",
+    return text_table(columns, body, right={"LB", "at s", "makespan", "free", "kept", "gap", "class gap", "K opt", "N opt", "N exact",
                                             "N best", "N gap", "exact s"}
                       | {f"LB {short[c.key]}" for c in CLASSES}) + notes
 
