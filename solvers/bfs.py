@@ -46,6 +46,9 @@ PYTHON_SMALL = 50_000
 # least PLAIN_MIN seconds (up to half of the limit), where the classes whose bound is far below
 # their optimum are decided (lt-1's keep class: 1.4-2.2 s)
 PLAIN_SHARE, PLAIN_MIN = 0.05, 5.0
+# the abstraction's share of the time left at most: where it is not built in time, the search goes
+# on unguided with the rest (lt-5's keep class: 66 s to build, then decided in 11 s)
+BUILD_SHARE = 0.5
 
 
 @dataclass(frozen=True)
@@ -67,9 +70,10 @@ class Options(MethodOptions):
     close to their optimum (short schedules of several robots) and slows the others down.
     ``abstraction``: for ``keep`` and ``no-scaffold`` (widened or not), the exact distances of a
     coarser world where each group of cells keeps only its count of tiles
-    (:mod:`.joint.abstraction`), built once where it fits; they cut the search below an incumbent
-    and, without one, it deepens from their bound at the start (the direction ``both``, asked
-    for, goes without them)."""
+    (:mod:`.joint.abstraction`), built once where it fits and within half the time left
+    (:data:`BUILD_SHARE`; else the search goes on without them); the search then deepens from
+    their bound at the start, below the incumbent if one is given (the direction ``both``,
+    asked for, goes without them)."""
 
     METHOD = "bfs"
     cells: str = option("all", choices=KINDS,
@@ -144,7 +148,7 @@ def plan(instance: Instance, options: Options | None = None, run: Run | None = N
     if guided:
         from .joint.abstraction import attach
 
-        tables, built = attach(instance, cells, tables, budget, room)
+        tables, built = attach(instance, cells, tables, budget.share(BUILD_SHARE), room)
         room -= 0 if built is None else built["states"]
     cap = int(room // per)
     max_states = options.max_states or cap

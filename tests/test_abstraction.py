@@ -166,3 +166,24 @@ def test_guided_optima_equal_the_brute_force():
 @pytest.mark.slow
 def test_guided_optima_equal_the_brute_force_on_many():
     assert brute_force_agrees(tiny_instances(90, first_seed=20_000) + bridges(40), 10_000) >= 150
+
+
+def test_the_build_stops_at_its_budget_and_the_search_goes_on_unguided(monkeypatch):
+    """The build polls its budget between parts of a layer: a budget spent after a few looks
+    stops it (no table), and bfs then searches the class without it, to the same optimum."""
+    from itertools import count
+
+    from bille.solvers.bfs import Options, plan
+
+    inst = bridges(1)[0]
+    cells = cells_of(inst, "keep")
+    t = compile_tables(inst, cells)
+    ticks = count()
+    assert abstraction.build(inst, cells, t, Budget(2.5, clock=lambda: float(next(ticks)))) is None
+    assert abstraction.build(inst, cells, t, Budget()) is not None
+    plain = bfs(inst, cells="keep", abstraction=False)
+    monkeypatch.setattr(abstraction, "build", lambda *args, **kw: None)  # as if its share ran out
+    got = plan(inst, Options(engine="compiled", cells="keep"))
+    assert "abstraction" not in got.stats
+    assert got.status == plain.status == "optimal"
+    assert validate(inst, got.schedule).metrics.makespan == plain.metrics.makespan

@@ -53,7 +53,10 @@ from .cells import Cells
 from .tables import Tables
 
 MAX_SIZE = 2_000_000_000  # abstract states (a byte each)
-CHUNK = 1 << 22  # states a call of the compiled layer looks at (the budget is polled between calls)
+# a call of the compiled layer looks at about this many joint steps backwards (its states times the
+# joint actions of a state at most), so the budget is polled within a second or so
+WORK = 1 << 25
+OUT = 1 << 22  # states listed per buffer
 
 
 @dataclass(frozen=True, eq=False)
@@ -180,13 +183,14 @@ def build(instance: Instance, cells: Cells, t: Tables, budget=None) -> Abstracti
     _goals(dist, t.m, V, t.gid, glob, front, goal_cell, int(np.dot(goal_counts, mult[:k])) if k else 0,
            int(np.prod(sizes + 1)))
     frontier = np.flatnonzero(dist == 0)
-    out = np.empty(max(CHUNK, t.kind.shape[1] ** t.m), np.int64)
+    out = np.empty(max(OUT, t.kind.shape[1] ** t.m), np.int64)
+    chunk = max(1, WORK // t.kind.shape[1] ** t.m)
     for level in range(UNREACHED - 1):
         parts, pos, nout = [], 0, 0
         while pos < len(frontier):
             if budget is not None and budget.expired():
                 return None
-            hi = min(pos + CHUNK, len(frontier))
+            hi = min(pos + chunk, len(frontier))
             pos, nout = _layer(dist, level, frontier, pos, hi, out, nout, t.m, V, t.gid, local, rstart, rp, ra, t.kind,
                                t.target, t.carry_ok, t.masks, t.W, group, sizes, mult, k, t.sym_start, t.sym_idx)
             if pos < hi:  # out is full (it holds the steps backwards of any one state)
