@@ -2,10 +2,11 @@
 world, searched backwards once from its goals (a pattern database).
 
 **The abstract world.** Its state keeps each robot's pose and load as they are, and of the tiles
-only how many lie on each *group* of cells: the groups are the 4-connected components of the
-cells the class allows to change, less its pinned cells (:func:`bille.solvers.bounds.classes.pinned`:
-cells that hold a tile at every step of every schedule of the class). Its steps are the joint
-actions of the robots under the rules with three of them relaxed:
+only how many lie on each *group* of cells. The cells the class allows to change, less its
+pinned cells (:func:`bille.solvers.bounds.classes.pinned`: cells that hold a tile at every step
+of every schedule of the class), are split into those where the start and the goal differ and
+the others, and the groups are the 4-connected pieces of each. Its steps are the joint actions
+of the robots under the rules with three of them relaxed:
 
 - support: a robot may stand on any cell that may hold a tile in the class (the cells allowed
   to change, and the start's tiles), whether it holds one or not (no other cell ever does);
@@ -35,7 +36,9 @@ one byte a state of the whole abstract space, where it is small enough (:data:`M
 **Interchangeable robots** (one moveset, no goal cell: the search's symmetry groups) are alike in
 the abstract world too, so a state's distance is that of the state with their values sorted;
 only sorted states are stored and looked up (the search backwards from a sorted state reaches
-every state one step before it or before any of its permutations, up to sorting).
+every state one step before it or before any of its permutations, up to sorting), each group's
+sorted values ranked as a multiset, so the table of three such robots is about a sixth of
+their values cubed.
 """
 from __future__ import annotations
 
@@ -45,10 +48,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from bille.instances import Instance
-from bille.instances.jit import jit
 
 from . import kernel
-from .compiled import UNREACHED, abstract_distance, sort_groups
+from .backwards import goals, layer
+from .compiled import UNREACHED, abstract_distance
 from .cells import Cells
 from .tables import Tables
 
@@ -64,12 +67,19 @@ class Abstraction:
     """The abstract distances (module docstring) and how a packed state maps to its index.
 
     ``local[g, p]`` is pose ``p``'s index among the poses of graph ``g`` whose feet may stand
-    (-1 elsewhere), ``V[i]`` twice robot ``i``'s number of them; ``gmask[k, w]`` the bits of group
-    ``k`` in tile word ``w``, ``size[k]`` its cells; ``dist`` one byte per index: :data:`UNREACHED` where no abstract goal is reached when
-    ``complete``, else where none is reached in 254 steps (a bound all the same)."""
+    (-1 elsewhere); a robot's local value is twice that plus its load. The robots' part of an
+    index runs over ``blocks`` (rows ``start, robots, values``): each group of interchangeable
+    robots is one block, its robots' sorted local values ranked as a multiset, and every other
+    robot a block of its own; ``order[start:start + robots]`` lists a block's robots and
+    ``binom`` the binomial coefficients the ranks read. ``gmask[k, w]`` has the bits of group
+    ``k`` in tile word ``w``, ``size[k]`` its cells; ``dist`` one byte per index:
+    :data:`UNREACHED` where no abstract goal is reached when ``complete``, else where none is
+    reached in 254 steps (a bound all the same)."""
 
     local: np.ndarray
-    V: np.ndarray
+    order: np.ndarray
+    blocks: np.ndarray
+    binom: np.ndarray
     gmask: np.ndarray
     size: np.ndarray
     dist: np.ndarray
@@ -84,7 +94,8 @@ class Abstraction:
             for i, v in zip(idx, sorted(vals[i] for i in idx)):
                 vals[i] = v
         vals = np.array(vals, np.int64)
-        return int(abstract_distance(vals, row, t.nR, t.gid, self.local, self.V, self.gmask, self.size, self.dist))
+        return int(abstract_distance(vals, row, t.nR, t.gid, self.local, self.order, self.blocks, self.binom,
+                                     self.gmask, self.size, self.dist))
 
 
 def groups(instance: Instance, cells: Cells) -> tuple[np.ndarray, int]:
@@ -106,14 +117,40 @@ def groups(instance: Instance, cells: Cells) -> tuple[np.ndarray, int]:
 
 def size_of(instance: Instance, cells: Cells) -> int:
     """The number of abstract states (its distances take a byte each)."""
+    from math import comb
+
     possible = instance.start.tiles | cells.mask
     group, k = groups(instance, cells)
     sizes = np.bincount(group[group >= 0], minlength=k)
     total = int(np.prod(sizes + 1, dtype=np.float64))
-    for i in range(instance.num_robots):
-        graph = instance.world.graphs[i]
-        total *= 2 * int(_standing(graph, possible).sum())
+    alike: dict = {}  # interchangeable robots (no goal cell, one moveset): a multiset of values
+    for i, graph in enumerate(instance.world.graphs):
+        values = 2 * int(_standing(graph, possible).sum())
+        if instance.goal_cells[i] >= 0:
+            total *= values
+        else:
+            alike.setdefault(id(graph), []).append(values)
+    for values in alike.values():
+        total *= comb(values[0] + len(values) - 1, len(values))
     return total
+
+
+def _blocks(t: Tables, values: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``order``, ``blocks`` and ``binom`` of :class:`Abstraction` for robots with ``values``
+    local values each: the search's symmetry groups, then every other robot alone."""
+    from math import comb
+
+    rows, order = [], []
+    grouped = set(int(i) for i in t.sym_idx)
+    parts = [[int(i) for i in t.sym_idx[t.sym_start[s]:t.sym_start[s + 1]]] for s in range(len(t.sym_start) - 1)]
+    parts += [[i] for i in range(t.m) if i not in grouped]
+    for robots in parts:
+        v = int(values[robots[0]])
+        rows.append((len(order), len(robots), comb(v + len(robots) - 1, len(robots))))
+        order += robots
+    top = int(values.max(initial=1)) + t.m + 1
+    binom = np.array([[comb(n, k) for k in range(t.m + 2)] for n in range(top)], np.int64)
+    return np.array(order, np.int64), np.array(rows, np.int64).reshape(-1, 3), binom
 
 
 def _standing(graph, possible: np.ndarray) -> np.ndarray:
@@ -149,6 +186,7 @@ def build(instance: Instance, cells: Cells, t: Tables, budget=None) -> Abstracti
         glob[g, :len(ids)] = ids
         count[g] = len(ids)
     V = np.array([2 * count[t.gid[i]] for i in range(t.m)], np.int64)
+    order, blocks, binom = _blocks(t, V)
     sizes = np.bincount(group[group >= 0], minlength=k).astype(np.int64)
     gmask = np.zeros((max(k, 1), t.nT), np.int64)
     for b, cell in enumerate(t.cell_of):
@@ -167,21 +205,21 @@ def build(instance: Instance, cells: Cells, t: Tables, budget=None) -> Abstracti
         q = t.succ[g, p, a]
         keep = local[g, q] >= 0
         p, a, q = p[keep], a[keep], q[keep]
-        order = np.argsort(local[g, q], kind="stable")
-        p, a, q = p[order], a[order], local[g, q[order]]
+        by = np.argsort(local[g, q], kind="stable")
+        p, a, q = p[by], a[by], local[g, q[by]]
         rstart[g, 1:] = np.cumsum(np.bincount(q, minlength=P))[:P]
         rstart[g] += sum(len(x) for x in rp_list)
         rp_list.append(p)
         ra_list.append(a)
     rp = np.concatenate(rp_list).astype(np.int64) if rp_list else np.zeros(0, np.int64)
     ra = np.concatenate(ra_list).astype(np.int64) if ra_list else np.zeros(0, np.int64)
-    total = int(np.prod(V)) * int(np.prod(sizes + 1))
+    total = int(np.prod(blocks[:, 2])) * int(np.prod(sizes + 1))
     dist = np.full(total, UNREACHED, np.uint8)
     mult = np.ones(max(k, 1), np.int64)
     for j in range(k - 2, -1, -1):
         mult[j] = mult[j + 1] * (sizes[j + 1] + 1)
-    _goals(dist, t.m, V, t.gid, glob, front, goal_cell, int(np.dot(goal_counts, mult[:k])) if k else 0,
-           int(np.prod(sizes + 1)))
+    goals(dist, t.m, V, t.gid, glob, front, goal_cell, int(np.dot(goal_counts, mult[:k])) if k else 0,
+           int(np.prod(sizes + 1)), order, blocks, binom, t.sym_start, t.sym_idx)
     frontier = np.flatnonzero(dist == 0)
     out = np.empty(max(OUT, t.kind.shape[1] ** t.m), np.int64)
     chunk = max(1, WORK // t.kind.shape[1] ** t.m)
@@ -191,180 +229,16 @@ def build(instance: Instance, cells: Cells, t: Tables, budget=None) -> Abstracti
             if budget is not None and budget.expired():
                 return None
             hi = min(pos + chunk, len(frontier))
-            pos, nout = _layer(dist, level, frontier, pos, hi, out, nout, t.m, V, t.gid, local, rstart, rp, ra, t.kind,
-                               t.target, t.carry_ok, t.masks, t.W, group, sizes, mult, k, t.sym_start, t.sym_idx)
+            pos, nout = layer(dist, level, frontier, pos, hi, out, nout, t.m, t.gid, local, rstart, rp, ra, t.kind,
+                               t.target, t.carry_ok, t.masks, t.W, group, sizes, mult, k, t.sym_start, t.sym_idx, order,
+                               blocks, binom)
             if pos < hi:  # out is full (it holds the steps backwards of any one state)
                 parts.append(out[:nout].copy())
                 nout = 0
         frontier = np.concatenate(parts + [out[:nout]])
         if len(frontier) == 0:
-            return Abstraction(local, V, gmask, sizes, dist)
-    return Abstraction(local, V, gmask, sizes, dist, complete=False)
-
-
-@jit
-def _goals(dist, m, V, gid, glob, front, goal_cell, cgoal, NC):  # pragma: no cover - compiled
-    """Every abstract goal at distance 0: no load, each robot with a goal cell on it."""
-    total = np.int64(1)
-    for i in range(m):
-        total *= V[i] // 2
-    for code in range(total):
-        r = code
-        idx = np.int64(0)
-        ok = True
-        for i in range(m - 1, -1, -1):
-            half = V[i] // 2
-            lp = r % half
-            r //= half
-            if goal_cell[i] >= 0 and front[gid[i], glob[gid[i], lp]] != goal_cell[i]:
-                ok = False
-                break
-        if not ok:
-            continue
-        r = code
-        mult = np.int64(1)
-        for i in range(m - 1, -1, -1):
-            half = V[i] // 2
-            idx += (2 * (r % half)) * mult
-            r //= half
-            mult *= V[i]
-        dist[idx * NC + cgoal] = 0
-
-
-@jit
-def _layer(dist, level, frontier, lo, hi, out, nout, m, V, gid, local, rstart, rp, ra, kind, target, carry_ok, masks,
-           W, group, size, mult, k, sym_start, sym_idx):  # pragma: no cover - compiled
-    """The states one step before those of ``frontier[lo:hi]`` (at ``level``) that have no distance
-    yet get ``level + 1`` and are listed in ``out`` from ``nout`` on. Stops before a state whose
-    steps backwards might not fit in ``out``; returns where it stopped and the new ``nout``."""
-    NC = np.int64(1)
-    for j in range(k):
-        NC *= size[j] + 1
-    A = kind.shape[1]
-    cv = np.zeros((m, A), np.int64)  # each robot's steps backwards: its value before,
-    cp = np.zeros((m, A), np.int64)  # pose before, action,
-    ca = np.zeros((m, A), np.int64)
-    cc = np.zeros((m, A), np.int64)  # load before,
-    cg = np.zeros((m, A), np.int64)  # group picked (+) or placed on (-): 1 + group, signed
-    nc = np.zeros(m, np.int64)
-    vals = np.zeros(m, np.int64)
-    before_vals = np.zeros(m, np.int64)
-    choice = np.zeros(m, np.int64)
-    usedw = np.zeros((m + 1, max(W, 1)), np.int64)
-    counts = np.zeros(max(k, 1), np.int64)
-    delta_pick = np.zeros(max(k, 1), np.int64)
-    delta_place = np.zeros(max(k, 1), np.int64)
-    rm = np.ones(m, np.int64)
-    for i in range(m - 2, -1, -1):
-        rm[i] = rm[i + 1] * V[i + 1]
-    for e in range(lo, hi):
-        idx = frontier[e]
-        cidx = idx % NC
-        r = idx // NC
-        for i in range(m - 1, -1, -1):
-            vals[i] = r % V[i]
-            r //= V[i]
-        for j in range(k):
-            counts[j] = (cidx // mult[j]) % (size[j] + 1)
-        dead = False
-        for i in range(m):
-            g = gid[i]
-            q = vals[i] >> 1
-            c1 = vals[i] & 1
-            n = 0
-            for e in range(rstart[g, q], rstart[g, q + 1]):
-                p = rp[e]
-                a = ra[e]
-                kk = kind[g, a]
-                t = target[g, p, a]
-                if kk == kernel.PICK:
-                    if c1 != 1 or t < 0 or group[t] < 0:
-                        continue
-                    c0 = 0
-                    sg = 1 + group[t]
-                elif kk == kernel.PLACE:
-                    if c1 != 0 or t < 0 or group[t] < 0 or not carry_ok[g, p, a]:
-                        continue
-                    c0 = 1
-                    sg = -(1 + group[t])
-                else:
-                    if c1 == 1 and not carry_ok[g, p, a]:
-                        continue
-                    c0 = c1
-                    sg = 0
-                cv[i, n] = 2 * local[g, p] + c0
-                cp[i, n] = p
-                ca[i, n] = a
-                cc[i, n] = c0
-                cg[i, n] = sg
-                n += 1
-            nc[i] = n
-            if n == 0:
-                dead = True
-        if dead:
-            continue
-        most = np.int64(1)
-        for i in range(m):
-            most *= nc[i]
-        if nout + most > out.shape[0]:
-            return e, nout
-        lev = 0
-        choice[0] = -1
-        while lev >= 0:
-            choice[lev] += 1
-            ok = False
-            while choice[lev] < nc[lev]:
-                n = choice[lev]
-                g = gid[lev]
-                ok = True
-                for w in range(W):
-                    if usedw[lev, w] & masks[g, cp[lev, n], ca[lev, n], cc[lev, n], w] != 0:
-                        ok = False
-                        break
-                if ok:
-                    for w in range(W):
-                        usedw[lev + 1, w] = usedw[lev, w] | masks[g, cp[lev, n], ca[lev, n], cc[lev, n], w]
-                    break
-                choice[lev] += 1
-            if not ok:
-                lev -= 1
-                continue
-            if lev < m - 1:
-                lev += 1
-                choice[lev] = -1
-                continue
-            # a joint step backwards: the counts before it
-            for j in range(k):
-                delta_pick[j] = 0
-                delta_place[j] = 0
-            for i in range(m):
-                s = cg[i, choice[i]]
-                if s > 0:
-                    delta_pick[s - 1] += 1
-                elif s < 0:
-                    delta_place[-s - 1] += 1
-            before = np.int64(0)
-            fine = True
-            for j in range(k):
-                b = counts[j] + delta_pick[j] - delta_place[j]
-                if b < 0 or b > size[j] or delta_pick[j] > b or delta_place[j] > size[j] - b:
-                    fine = False
-                    break
-                before += b * mult[j]
-            if not fine:
-                continue
-            for i in range(m):
-                before_vals[i] = cv[i, choice[i]]
-            sort_groups(before_vals, sym_start, sym_idx)  # interchangeable robots sorted (module docstring)
-            prev = np.int64(0)
-            for i in range(m):
-                prev += before_vals[i] * rm[i]
-            prev = prev * NC + before
-            if dist[prev] == UNREACHED:
-                dist[prev] = level + 1
-                out[nout] = prev
-                nout += 1
-    return hi, nout
+            return Abstraction(local, order, blocks, binom, gmask, sizes, dist)
+    return Abstraction(local, order, blocks, binom, gmask, sizes, dist, complete=False)
 
 
 def attach(instance: Instance, cells: Cells, t: Tables, budget, room: float) -> tuple[Tables, dict | None]:
@@ -383,7 +257,8 @@ def attach(instance: Instance, cells: Cells, t: Tables, budget, room: float) -> 
     a = build(instance, cells, t, budget)
     if a is None:
         return t, None
-    t = dataclasses.replace(t, pdb_local=a.local, pdb_V=a.V, pdb_gmask=a.gmask, pdb_size=a.size, pdb_dist=a.dist)
+    t = dataclasses.replace(t, pdb_local=a.local, pdb_order=a.order, pdb_blocks=a.blocks, pdb_binom=a.binom,
+                            pdb_gmask=a.gmask, pdb_size=a.size, pdb_dist=a.dist)
     start = a.at(t, t.pack(instance.start_state))
     return t, {"states": size, "start": start, "none": start == UNREACHED and a.complete,
                "s": round(budget.now() - began, 3)}

@@ -177,16 +177,36 @@ UNREACHED = 255  # the abstraction's distance where no abstract goal is reached
 
 
 @jit
-def abstract_distance(vals, row, nR, gid, local, V, gmask, size, dist):  # pragma: no cover - compiled
-    """The abstract distance of the state with robot values ``vals`` (``pose * 2 + carrying``)
-    and the tiles of the packed ``row`` (:class:`.abstraction.Abstraction`)."""
+def robot_index(lv, order, blocks, binom):  # pragma: no cover - compiled
+    """The index of the robots' local values ``lv`` (each group of interchangeable robots sorted)
+    among the abstraction's robot parts (:class:`.abstraction.Abstraction`): block by block, a
+    group's sorted values ranked as a multiset (the combinatorial number system over ``v_j + j``)."""
     idx = np.int64(0)
+    for b in range(blocks.shape[0]):
+        start, r, size = blocks[b, 0], blocks[b, 1], blocks[b, 2]
+        rank = np.int64(0)
+        for j in range(r):
+            rank += binom[lv[order[start + j]] + j, j + 1]
+        idx = idx * size + rank
+    return idx
+
+
+@jit
+def abstract_distance(vals, row, nR, gid, local, order, blocks, binom, gmask, size, dist):  # pragma: no cover
+    """The abstract distance of the state with robot values ``vals`` (``pose * 2 + carrying``,
+    each group of interchangeable robots sorted) and the tiles of the packed ``row``
+    (:class:`.abstraction.Abstraction`)."""
     for i in range(vals.shape[0]):
-        v = vals[i]
-        lp = local[gid[i], v >> 1]
-        if lp < 0:
+        if local[gid[i], vals[i] >> 1] < 0:
             return UNREACHED
-        idx = idx * V[i] + 2 * lp + (v & 1)
+    idx = np.int64(0)
+    for b in range(blocks.shape[0]):  # robot_index of the local values, read in place
+        start, r, bsize = blocks[b, 0], blocks[b, 1], blocks[b, 2]
+        rank = np.int64(0)
+        for j in range(r):
+            i = order[start + j]
+            rank += binom[2 * local[gid[i], vals[i] >> 1] + (vals[i] & 1) + j, j + 1]
+        idx = idx * bsize + rank
     for j in range(size.shape[0]):
         c = 0
         for w in range(gmask.shape[1]):

@@ -66,7 +66,7 @@ def expand(mode, states, parent, table, counters, cursor, hi, work, max_rows, de
            # the instance's tables (.tables.Tables)
            m, rbits, rpw, nR, nT, width, height, classic, gid, succ, coll, carry, carry_ok, need, target, kind,
            bit_of, cell_of, fixed, fixed_count, anchor, goal_words, dist, sym_start, sym_idx, masks, W, reach, fetch,
-           pdb_local, pdb_V, pdb_gmask, pdb_size, pdb_dist,
+           pdb_local, pdb_order, pdb_blocks, pdb_binom, pdb_gmask, pdb_size, pdb_dist,
            # scratch, allocated once by the caller
            tiles, occ, endocc, startocc, tgt, cand, ncand, choice, pose, carrying, after, vals, row, seen, stack,
            stamp, usedw, pend, pgoal, hs, touch,
@@ -287,7 +287,8 @@ def expand(mode, states, parent, table, counters, cursor, hi, work, max_rows, de
                     continue
             sort_groups(vals, sym_start, sym_idx)  # the robots of a symmetry group in sorted order
             if big and pdb_dist.shape[0] > 0:  # the abstraction's distance, of the sorted values (.abstraction)
-                e = abstract_distance(vals, row, nR, gid, pdb_local, pdb_V, pdb_gmask, pdb_size, pdb_dist)
+                e = abstract_distance(vals, row, nR, gid, pdb_local, pdb_order, pdb_blocks, pdb_binom, pdb_gmask, pdb_size,
+                                      pdb_dist)
                 if depth + 1 + e >= U:
                     counters[PRUNED] += 1
                     counters[LEAST_CUT] = min(counters[LEAST_CUT], depth + 1 + e)

@@ -60,7 +60,9 @@ class Tables:
     fetch: np.ndarray
     # the abstraction's distances and index (.abstraction.Abstraction; empty: none)
     pdb_local: np.ndarray = dataclasses.field(default_factory=lambda: np.full((1, 1), -1, np.int64))
-    pdb_V: np.ndarray = dataclasses.field(default_factory=lambda: np.ones(1, np.int64))
+    pdb_order: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(1, np.int64))
+    pdb_blocks: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros((0, 3), np.int64))
+    pdb_binom: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros((1, 1), np.int64))
     pdb_gmask: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros((1, 1), np.int64))
     pdb_size: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0, np.int64))
     pdb_dist: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0, np.uint8))
@@ -74,8 +76,8 @@ class Tables:
         return (self.m, self.rbits, self.rpw, self.nR, self.nT, self.width, self.height, self.classic, self.gid,
                 self.succ, self.coll, self.carry, self.carry_ok, self.need, self.target, self.kind, self.bit_of,
                 self.cell_of, self.fixed, self.fixed_count, self.anchor, self.goal_words, self.dist,
-                self.sym_start, self.sym_idx, self.masks, self.W, self.reach, self.fetch, self.pdb_local, self.pdb_V,
-                self.pdb_gmask, self.pdb_size, self.pdb_dist)
+                self.sym_start, self.sym_idx, self.masks, self.W, self.reach, self.fetch, self.pdb_local, self.pdb_order,
+                self.pdb_blocks, self.pdb_binom, self.pdb_gmask, self.pdb_size, self.pdb_dist)
 
     def pack(self, state: State, canonical: bool = True) -> np.ndarray:
         """A state as a row of words; ``canonical``: the robots of each symmetry group sorted."""
