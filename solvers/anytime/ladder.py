@@ -23,8 +23,9 @@ structure around the cells it must change; ties by position. The ladder is a sea
 schedules and a record of what each class proves, not a bound on every schedule.
 
 Where the abstraction of the class without scaffold fits (:mod:`bille.solvers.joint.abstraction`),
-that class, the ladder's top, is searched first: its search deepens from the abstraction's bound
-to the best schedule, which decides it on lt-1 (54) and lt-3 (53) in seconds. Decided, it holds
+that class, the ladder's top, is searched first, within two thirds of the ladder's time: its
+search deepens from the abstraction's bound to the best schedule, which decides it on lt-1 (54)
+and lt-3 (53) in seconds. Decided, it holds
 every rung's class, so no rung can give a shorter schedule and the ladder ends there.
 """
 from __future__ import annotations
@@ -40,6 +41,9 @@ from bille.instances.metrics import metrics
 from bille.instances.schedule import Schedule, bind
 
 RUNG = 2  # cells a rung adds to the one below
+# the top's share of the ladder's time at most (where its abstraction is not built in time, the
+# search of the top goes on unguided and decides little: the rungs get the rest)
+TOP_SHARE = 2 / 3
 
 
 def candidates(instance: Instance) -> list[tuple[int, int]]:
@@ -135,16 +139,20 @@ def _top(instance: Instance, best, budget: Budget, offer, max_states: int) -> di
     """The top of the ladder first, where the abstraction of its class fits
     (:mod:`bille.solvers.joint.abstraction`): the schedules without scaffold, searched below the
     best schedule. What it proved, as a rung's row (``cells``: ``no-scaffold``), or None."""
+    from bille.instances.limits import address_room, memory_budget
+
     from ..bfs import Options, plan as bfs
     from ..joint.abstraction import MAX_SIZE, size_of
     from ..joint.cells import cells_of
 
-    if budget.expired() or size_of(instance, cells_of(instance, "no-scaffold")) > MAX_SIZE:
+    room = min(memory_budget(), address_room())
+    if budget.expired() or size_of(instance, cells_of(instance, "no-scaffold")) > min(MAX_SIZE, room // 2):
         return None
     incumbent = best()
     began = budget.now()
     schedule = Schedule.from_ids(instance, incumbent.ids, meta={"method": incumbent.method})
-    got = bfs(instance, Options(cells="no-scaffold", incumbent=schedule, max_states=max_states), Run(budget.child()))
+    got = bfs(instance, Options(cells="no-scaffold", incumbent=schedule, max_states=max_states),
+              Run(budget.share(TOP_SHARE)))
     if "abstraction" not in got.stats:  # not built in the time or the memory left: nothing searched to speak of
         return None
     return _row(instance, got, incumbent, budget.now() - began, offer, cells="no-scaffold")

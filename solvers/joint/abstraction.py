@@ -164,8 +164,8 @@ def _standing(graph, possible: np.ndarray) -> np.ndarray:
 def build(instance: Instance, cells: Cells, t: Tables, budget=None) -> Abstraction | None:
     """The abstraction of ``cells`` on ``instance`` (module docstring), or None where the rules'
     collision sets are not bit masks (classic collisions, large grids), a pick or place carries
-    cells, or the space exceeds :data:`MAX_SIZE`. ``budget`` polled between layers: None if it
-    runs out first."""
+    cells, or the space exceeds :data:`MAX_SIZE`. ``budget`` polled every :data:`WORK` joint
+    steps backwards or so: None if it runs out first."""
     from .tables import reversible
 
     if t.W == 0 or t.classic or not reversible(t) or size_of(instance, cells) > MAX_SIZE:
