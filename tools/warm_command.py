@@ -31,8 +31,9 @@ def _joint() -> None:
     from bille.solvers import solve
 
     inst = load_instance(bundled_path("lt-4"))
-    found = solve(inst, "bfs", cells="keep", engine="compiled")  # from both ends
-    solve(inst, "bfs", cells="keep", engine="compiled", incumbent=found.schedule)  # forward, with the bound
+    found = solve(inst, "bfs", cells="keep", engine="compiled")  # guided by the abstraction
+    solve(inst, "bfs", cells="keep", engine="compiled", abstraction=False)  # from both ends
+    solve(inst, "bfs", cells="keep", engine="compiled", abstraction=False, incumbent=found.schedule)  # forward
 
 
 def _lacam() -> None:
