@@ -11,6 +11,7 @@ from bille.instances.jit import jit
 
 from . import kernel
 from .compiled import UNREACHED, robot_index, sort_groups
+from .marks import fits_bits
 
 
 @jit
@@ -127,14 +128,8 @@ def layer(dist, level, frontier, lo, hi, out, nout, m, gid, local, rstart, rp, r
             while choice[lev] < nc[lev]:
                 n = choice[lev]
                 g = gid[lev]
-                ok = True
-                for w in range(W):
-                    if usedw[lev, w] & masks[g, cp[lev, n], ca[lev, n], cc[lev, n], w] != 0:
-                        ok = False
-                        break
-                if ok:
-                    for w in range(W):
-                        usedw[lev + 1, w] = usedw[lev, w] | masks[g, cp[lev, n], ca[lev, n], cc[lev, n], w]
+                if fits_bits(usedw, lev, masks[g, cp[lev, n], ca[lev, n], cc[lev, n]]):
+                    ok = True
                     break
                 choice[lev] += 1
             if not ok:

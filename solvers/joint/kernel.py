@@ -38,7 +38,7 @@ from __future__ import annotations
 import numpy as np
 
 from .compiled import abstract_distance, jit, connected, popcount, sort_groups, store
-from .marks import fits, release, unmark
+from .marks import fits, fits_bits, release, unmark
 
 WAIT, MOTION, PICK, PLACE = 0, 1, 2, 3  # bille.instances.moveset.Kind
 SEARCH, FIND, COLLECT = 0, 1, 2  # modes of expand
@@ -138,8 +138,7 @@ def expand(mode, states, parent, table, counters, cursor, hi, work, max_rows, de
             for i in range(level + 1):
                 if bits:
                     if choice[i] >= 0:
-                        for w in range(W):
-                            usedw[i + 1, w] = usedw[i, w] | masks[gid[i], pose[i], cand[i, choice[i]], carrying[i], w]
+                        fits_bits(usedw, i, masks[gid[i], pose[i], cand[i, choice[i]], carrying[i]])
                 elif choice[i] >= 0:
                     fits(i, cand[i, choice[i]], gid[i], pose[i], carrying[i], classic, coll, carry, succ, target,
                           occ, endocc, startocc, tgt, after)
@@ -179,14 +178,8 @@ def expand(mode, states, parent, table, counters, cursor, hi, work, max_rows, de
             while choice[level] < ncand[level]:
                 a = cand[level, choice[level]]
                 if bits:
-                    ok = True
-                    for w in range(W):
-                        if usedw[level, w] & masks[g, p, a, c, w] != 0:
-                            ok = False
-                            break
-                    if ok:
-                        for w in range(W):
-                            usedw[level + 1, w] = usedw[level, w] | masks[g, p, a, c, w]
+                    if fits_bits(usedw, level, masks[g, p, a, c]):
+                        ok = True
                         break
                 elif fits(level, a, g, p, c, classic, coll, carry, succ, target, occ, endocc, startocc, tgt,
                            after):

@@ -6,6 +6,19 @@ from .compiled import jit
 
 
 @jit
+def fits_bits(usedw, level, mask):  # pragma: no cover - compiled
+    """Rule 3 by bit masks: whether an action's collision set ``mask`` (its words) shares no cell
+    with the sets chosen below ``level`` (``usedw[level]``); if so, ``usedw[level + 1]`` gets
+    their union."""
+    for w in range(mask.shape[0]):
+        if usedw[level, w] & mask[w] != 0:
+            return False
+    for w in range(mask.shape[0]):
+        usedw[level + 1, w] = usedw[level, w] | mask[w]
+    return True
+
+
+@jit
 def fits(i, a, g, p, c, classic, coll, carry, succ, target, occ, endocc, startocc, tgt, after):  # pragma: no cover
     """Whether robot ``i``'s action ``a`` is free of collisions with the robots chosen before it
     (rule 3, or the classic convention); marks its cells if so."""
