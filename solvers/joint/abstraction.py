@@ -51,9 +51,9 @@ from bille.instances import Instance
 
 from . import kernel
 from .backwards import goals, layer
-from .compiled import UNREACHED, abstract_distance
+from .compiled import UNREACHED, abstract_distance, sort_groups
 from .cells import Cells
-from .tables import Tables
+from .tables import Tables, distinct_graphs, interchangeable
 
 MAX_SIZE = 2_000_000_000  # abstract states (a byte each)
 # a call of the compiled layer looks at about this many joint steps backwards (its states times the
@@ -88,12 +88,8 @@ class Abstraction:
     def at(self, t: Tables, row: np.ndarray) -> int:
         """The bound of a packed state (:data:`UNREACHED` where no abstract goal is reached)."""
         rmask = (1 << t.rbits) - 1
-        vals = [(int(row[i // t.rpw]) >> ((i % t.rpw) * t.rbits)) & rmask for i in range(t.m)]
-        for s in range(len(t.sym_start) - 1):  # interchangeable robots sorted, as stored
-            idx = t.sym_idx[t.sym_start[s]:t.sym_start[s + 1]]
-            for i, v in zip(idx, sorted(vals[i] for i in idx)):
-                vals[i] = v
-        vals = np.array(vals, np.int64)
+        vals = np.array([(int(row[i // t.rpw]) >> ((i % t.rpw) * t.rbits)) & rmask for i in range(t.m)], np.int64)
+        sort_groups(vals, t.sym_start, t.sym_idx)  # interchangeable robots sorted, as stored
         return int(abstract_distance(vals, row, t.nR, t.gid, self.local, self.order, self.blocks, self.binom,
                                      self.gmask, self.size, self.dist))
 
@@ -123,15 +119,12 @@ def size_of(instance: Instance, cells: Cells) -> int:
     group, k = groups(instance, cells)
     sizes = np.bincount(group[group >= 0], minlength=k)
     total = int(np.prod(sizes + 1, dtype=np.float64))
-    alike: dict = {}  # interchangeable robots (no goal cell, one moveset): a multiset of values
-    for i, graph in enumerate(instance.world.graphs):
-        values = 2 * int(_standing(graph, possible).sum())
-        if instance.goal_cells[i] >= 0:
-            total *= values
-        else:
-            alike.setdefault(id(graph), []).append(values)
-    for values in alike.values():
-        total *= comb(values[0] + len(values) - 1, len(values))
+    _, gid = distinct_graphs(instance.world.graphs)
+    sym = interchangeable(instance, gid)  # each group: a multiset of values
+    alone = set(range(instance.num_robots)) - {i for idx in sym for i in idx}
+    values = [2 * int(_standing(graph, possible).sum()) for graph in instance.world.graphs]
+    for idx in sym + [[i] for i in sorted(alone)]:
+        total *= comb(values[idx[0]] + len(idx) - 1, len(idx))
     return total
 
 
@@ -173,10 +166,7 @@ def build(instance: Instance, cells: Cells, t: Tables, budget=None) -> Abstracti
     possible = instance.start.tiles | cells.mask
     group, k = groups(instance, cells)
     G, P, A = t.succ.shape
-    graphs = []
-    for g in instance.world.graphs:
-        if all(h is not g for h in graphs):
-            graphs.append(g)
+    graphs, _ = distinct_graphs(instance.world.graphs)
     local = np.full((G, P), -1, np.int64)
     glob = np.full((G, P), -1, np.int64)
     count = np.zeros(G, np.int64)
@@ -248,7 +238,7 @@ def attach(instance: Instance, cells: Cells, t: Tables, budget, room: float) -> 
     most :data:`MAX_SIZE` states and half of ``room`` bytes, built within ``budget``. Also what
     was built (its states, the start's bound, whether it proves that the class has no schedule:
     no abstract goal reached from the start, seconds), or None."""
-    if cells.unconditional or t.W == 0 or t.classic:
+    if cells.unconditional:
         return t, None
     size = size_of(instance, cells)
     if size > min(MAX_SIZE, room // 2):

@@ -112,7 +112,7 @@ def compile_tables(instance: Instance, cells: Cells, distances: bool = True) -> 
     incumbent); without, the bound is 1 off the goal cell and 0 on it (what the goal test reads)."""
     world = instance.world
     m, n = instance.num_robots, instance.width * instance.height
-    graphs, gid = _distinct_graphs(world.graphs)
+    graphs, gid = distinct_graphs(world.graphs)
     P = max([g.num_poses for g in graphs] + [1])
     succ, coll, carry, carry_ok, need, target, kind = _stacked(graphs, P)
 
@@ -136,11 +136,7 @@ def compile_tables(instance: Instance, cells: Cells, distances: bool = True) -> 
     check_budget(8 * m * P, lambda size: f"the joint search: {m} robots' distance tables on {P} poses need {size}",
                  OptionError)
     dist = _goal_distances(instance, graphs, gid, possible, P, distances)
-    groups: dict = {}
-    for i, goal in enumerate(instance.goal_cells):
-        if goal < 0:
-            groups.setdefault(int(gid[i]), []).append(i)
-    sym = [idx for idx in groups.values() if len(idx) > 1]
+    sym = interchangeable(instance, gid)
     sym_start = np.cumsum([0] + [len(idx) for idx in sym]).astype(np.int64)
     sym_idx = np.array([i for idx in sym for i in idx], dtype=np.int64)
     classic = instance.collisions == "classic"
@@ -155,7 +151,17 @@ def compile_tables(instance: Instance, cells: Cells, distances: bool = True) -> 
                   sym_idx, masks, W, reach, fetch)
 
 
-def _distinct_graphs(robot_graphs) -> tuple[list, np.ndarray]:
+def interchangeable(instance: Instance, gid: np.ndarray) -> list[list[int]]:
+    """The groups of two or more interchangeable robots (one pose graph ``gid``, no goal cell),
+    each in increasing order: the search's symmetry groups."""
+    groups: dict = {}
+    for i, goal in enumerate(instance.goal_cells):
+        if goal < 0:
+            groups.setdefault(int(gid[i]), []).append(i)
+    return [idx for idx in groups.values() if len(idx) > 1]
+
+
+def distinct_graphs(robot_graphs) -> tuple[list, np.ndarray]:
     """The distinct pose graphs (robots of one moveset share one) and each robot's index among them."""
     graphs: list = []
     gid = np.zeros(len(robot_graphs), dtype=np.int64)
@@ -260,11 +266,7 @@ def reverse_tables(instance: Instance, forward: Tables) -> Tables:
     tiles before the step, which a valid state has too; the tiles after the step were checked
     when the state was stored. No state is a goal of this side (``dist`` is 1 everywhere): the
     sides meet instead."""
-    world = instance.world
-    graphs = []
-    for g in world.graphs:
-        if all(h is not g for h in graphs):
-            graphs.append(g)
+    graphs, _ = distinct_graphs(instance.world.graphs)
     G, P, A = forward.succ.shape
     rsucc = np.full((G, P, A), -1, np.int32)
     rcoll = np.full_like(forward.coll, -1)
